@@ -1,0 +1,198 @@
+//! Rendering an [`Analysis`]: a markdown table (`metric | value | note`) or JSON.
+
+use crate::metrics::Analysis;
+use std::fmt::Write;
+
+/// Pretty-printed JSON of the whole analysis (non-finite numbers become `null`).
+pub fn to_json(a: &Analysis) -> String {
+    serde_json::to_string_pretty(a).expect("Analysis serialises to JSON")
+}
+
+/// A number with 6 significant digits, scientific notation outside [1e-3, 1e6).
+pub fn fmt_num(x: f64) -> String {
+    if x == 0.0 {
+        "0".to_string()
+    } else if !x.is_finite() {
+        format!("{x}")
+    } else if (1e-3..1e6).contains(&x.abs()) {
+        let digits = 5 - x.abs().log10().floor() as i32;
+        format!("{:.*}", digits.max(0) as usize, x)
+    } else {
+        format!("{x:.5e}")
+    }
+}
+
+fn opt(x: Option<f64>) -> String {
+    x.map(fmt_num).unwrap_or_else(|| "n/a".to_string())
+}
+
+fn pct(x: f64) -> String {
+    format!("{}%", fmt_num(100.0 * x))
+}
+
+/// Markdown rendering: a title line and one table `metric | value | note`.
+pub fn to_markdown(a: &Analysis) -> String {
+    let mut rows: Vec<(String, String, String)> = Vec::new();
+    let mut row = |m: &str, v: String, note: &str| rows.push((m.into(), v, note.into()));
+
+    row("n", a.n.to_string(), "grains");
+    row("dimension", a.dimension.to_string(), "");
+    row(
+        "μ",
+        a.mu.map(fmt_num).unwrap_or_else(|| "∞".into()),
+        if a.cohesive {
+            "cohesive law"
+        } else {
+            "cohesionless law"
+        },
+    );
+    row("Φ", fmt_num(a.packing_fraction), "solid fraction");
+    row(
+        "interactions",
+        a.interactions.to_string(),
+        "listed contacts and distant attractions",
+    );
+    row(
+        "force threshold",
+        fmt_num(a.force_threshold),
+        if a.cohesive {
+            "absolute, in F0 (GRC07 T.VI)"
+        } else {
+            "tolerance × ⟨|N|⟩"
+        },
+    );
+    row(
+        "force-carrying",
+        a.force_carrying.to_string(),
+        "interactions with |N| above threshold",
+    );
+    row(
+        "N_c",
+        a.contacts.to_string(),
+        if a.cohesive {
+            "all interactions between non-isolated grains"
+        } else {
+            "force-carrying contacts between backbone grains"
+        },
+    );
+    row("z", fmt_num(a.z), "2N_c/n (AR07 §III.B)");
+    row("rule", format!("{:?}", a.rule), &a.rule.describe());
+    row(
+        "x0",
+        pct(a.rattler_fraction),
+        &format!(
+            "rattlers: {} grains, {} sweep(s)",
+            a.rattlers, a.rattler_sweeps
+        ),
+    );
+    row("z*", opt(a.z_backbone), "z/(1−x0), GRC07 (13)");
+    for (k, &x) in a.x_k.iter().enumerate() {
+        if x > 0.0 {
+            row(
+                &format!("x_{k}"),
+                pct(x),
+                if k == 0 {
+                    "= x0"
+                } else {
+                    "grains with k contacts (AR07 T.V, I)"
+                },
+            );
+        }
+    }
+    if let Some(s) = &a.cohesive_split {
+        row("z+", fmt_num(s.z_plus), "repulsive (GRC07 T.VI)");
+        row("z−", fmt_num(s.z_minus), "attractive");
+        row("z0", fmt_num(s.z_zero), "|N| ≤ threshold");
+        row("distant pairs", s.distant.to_string(), "gap > 0");
+        row("N+", opt(s.mean_repulsive), "mean repulsive force");
+        row("N+^(2)", opt(s.rms_repulsive), "quadratic mean");
+        row("N−", opt(s.mean_attractive), "mean |attractive force|");
+        row("N−^(2)", opt(s.rms_attractive), "quadratic mean");
+    }
+    let f = &a.forces;
+    row("⟨N⟩", opt(f.mean_normal), "over the N_c contacts");
+    row("Z(2)", opt(f.z2), "⟨N²⟩/⟨N⟩², AR07 (27)");
+    row("Z(5/3)", opt(f.z5_3), "AR07 (28)");
+    row("X1", opt(f.x1), "fraction with N > ⟨N⟩ (AR07 T.VI)");
+    row("M1", opt(f.m1), "⟨|T|/N⟩, N > ⟨N⟩");
+    row("M2", opt(f.m2), "⟨|T|/N⟩, N < ⟨N⟩");
+    let p = &a.pressure;
+    row("P measured", opt(p.measured), "tr σ_contact / d");
+    row("P kinetic", opt(p.kinetic), "tr σ_kinetic / d");
+    row(
+        "P exact",
+        fmt_num(p.exact),
+        &format!(
+            "(1/dΩ) Σ (N|r| + T·r), rel. diff {} (tangential part {})",
+            opt(p.exact_rel_diff),
+            fmt_num(p.exact_tangential)
+        ),
+    );
+    if let Some(r) = &p.ar07_22 {
+        row(
+            "P, AR07 (22)",
+            fmt_num(r.p_predicted),
+            &format!(
+                "zΦ⟨N⟩/(πa²), a = {}, rel. diff {}",
+                fmt_num(r.diameter),
+                fmt_num(r.rel_diff)
+            ),
+        );
+    }
+    if let Some(r) = &p.rumpf {
+        row(
+            "⟨N⟩, GRC07 (17)",
+            fmt_num(r.mean_normal_predicted),
+            &format!(
+                "π⟨d^D⟩P/(⟨d⟩zΦ), ⟨d⟩ = {}, ⟨d^D⟩ = {}, rel. diff {}",
+                fmt_num(r.mean_diameter),
+                fmt_num(r.mean_diameter_pow_d),
+                opt(r.rel_diff)
+            ),
+        );
+    }
+    if let Some(r) = &p.grc07_18 {
+        row(
+            "⟨N⟩, GRC07 (18)",
+            fmt_num(r.mean_normal_predicted),
+            &format!(
+                "7πaP/(9zΦ), a = {}, ⟨d⟩/a = {} (3/4), ⟨d²⟩/a² = {} (7/12), rel. diff {}",
+                fmt_num(r.a),
+                fmt_num(r.mean_diameter_over_a),
+                fmt_num(r.mean_diameter_sq_over_a2),
+                opt(r.rel_diff)
+            ),
+        );
+    }
+
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "## {} ({}, step {}, t = {}, {})\n",
+        a.scene,
+        a.code,
+        a.step,
+        fmt_num(a.time),
+        a.status
+    );
+    out.push_str("| metric | value | note |\n| --- | --- | --- |\n");
+    for (m, v, n) in rows {
+        let _ = writeln!(out, "| {m} | {v} | {} |", n.replace('|', "\\|"));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers() {
+        assert_eq!(fmt_num(0.0), "0");
+        assert_eq!(fmt_num(0.637), "0.637000");
+        assert_eq!(fmt_num(6.074), "6.07400");
+        assert_eq!(fmt_num(4000.0), "4000.00");
+        assert_eq!(fmt_num(1e-6), "1.00000e-6");
+        assert_eq!(fmt_num(-0.5), "-0.500000");
+    }
+}

@@ -1,0 +1,104 @@
+//! Hertz–Mindlin spheres (AR07 §II.A, App. A, App. B).
+
+use super::slider::Friction;
+use super::{ContactLaw, Pair, PairForce};
+use crate::geometry::{Dim, Linear};
+
+/// Hertz normal force with Mindlin tangential stiffness, Walton rescaling on unloading and
+/// viscous normal damping at a fraction ζ of critical. `F` selects the friction kind
+/// ([`super::slider::Frictionless`], [`super::slider::Coulomb`], [`super::slider::NoSlip`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HertzMindlin<F> {
+    /// Ẽ = E/(1−ν²).
+    pub e_tilde: f64,
+    /// K_T/K_N = (2−2ν)/(2−ν) (AR07 (3)).
+    pub kt_ratio: f64,
+    /// ζ: fraction of critical damping (AR07 (5)).
+    pub zeta: f64,
+    pub friction: F,
+}
+
+impl<F> HertzMindlin<F> {
+    pub fn new(e_tilde: f64, poisson: f64, zeta: f64, friction: F) -> Self {
+        HertzMindlin {
+            e_tilde,
+            kt_ratio: (2.0 - 2.0 * poisson) / (2.0 - poisson),
+            zeta,
+            friction,
+        }
+    }
+
+    /// Elastic normal force for overlap `h` and reduced radius `r_eff`: AR07 (1), written
+    /// N = (2/3) Ẽ √R* h^{3/2}, which is (Ẽ√a/3) h^{3/2} for equal spheres (R* = a/4).
+    #[inline(always)]
+    pub fn normal_force(&self, h: f64, r_eff: f64) -> f64 {
+        2.0 / 3.0 * self.e_tilde * (r_eff * h).sqrt() * h
+    }
+
+    /// K_N = dN/dh = Ẽ √(R* h) (AR07 (2)).
+    #[inline(always)]
+    pub fn normal_stiffness(&self, h: f64, r_eff: f64) -> f64 {
+        self.e_tilde * (r_eff * h).sqrt()
+    }
+}
+
+impl<D: Dim, F: Friction> ContactLaw<D> for HertzMindlin<F> {
+    type History = F::State<D>;
+    const MOMENTS: bool = F::ACTIVE;
+    const ROLLING: bool = false;
+
+    #[inline(always)]
+    fn range(&self) -> f64 {
+        0.0
+    }
+
+    #[inline(always)]
+    fn interact(&self, p: &Pair<D>, hist: &mut Self::History, dt: f64) -> PairForce<D> {
+        if p.gap >= 0.0 {
+            *hist = Default::default();
+            return PairForce::default();
+        }
+        let h = -p.gap;
+        let sq = (p.r_eff * h).sqrt();
+        let kn = self.e_tilde * sq;
+        let ne = 2.0 / 3.0 * kn * h;
+        let vn = p.v_contact.dot(&p.n);
+        // AR07 (4)–(5): N_v = α ḣ, α = ζ√(2 m K_N) for equal masses m, i.e. 2ζ√(m_eff K_N).
+        let alpha = 2.0 * self.zeta * (p.m_eff * kn).sqrt();
+        let normal = ne - alpha * vn;
+        let tangential = if F::ACTIVE {
+            let slip = (p.v_contact - p.n * vn) * dt;
+            let pivot = 0.5 * D::pivot_rate(p.w_i + p.w_j, p.n) * dt;
+            self.friction
+                .update::<D>(hist, p.n, pivot, slip, self.kt_ratio * kn, ne)
+        } else {
+            D::V::zero()
+        };
+        PairForce {
+            normal,
+            normal_elastic: ne,
+            tangential,
+            rolling: D::Ang::zero(),
+        }
+    }
+
+    fn max_stiffness(&self, force: f64, r_eff_max: f64) -> f64 {
+        // Overlap at which N = force, then K_N there.
+        let h = (1.5 * force / (self.e_tilde * r_eff_max.sqrt())).powf(2.0 / 3.0);
+        self.normal_stiffness(h, r_eff_max)
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "hertz-mindlin Ẽ={:.4e} K_T/K_N={:.4} ζ={} μ={}",
+            self.e_tilde,
+            self.kt_ratio,
+            self.zeta,
+            self.friction.mu()
+        )
+    }
+
+    fn stored(&self, hist: &Self::History) -> (D::V, D::Ang) {
+        (F::force::<D>(hist), D::Ang::zero())
+    }
+}

@@ -1,0 +1,151 @@
+//! Linear spring–dashpot–Coulomb law with optional short-range adhesion and rolling
+//! resistance (GRC07 §II.B, GRC08 §II.B). Without adhesion it is the classic cohesionless
+//! linear law.
+
+use super::slider::{Friction, RollingResistance};
+use super::{ContactLaw, Pair, PairForce};
+use crate::geometry::{Dim, Linear as _};
+
+/// Adhesion or its absence.
+pub trait Cohesion: Copy + Send + Sync + std::fmt::Debug + 'static {
+    const ACTIVE: bool;
+    /// Pull-off force F0.
+    fn f0(&self) -> f64;
+    /// Attraction range D0.
+    fn d0(&self) -> f64;
+}
+
+/// No adhesion.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NoCohesion;
+
+/// GRC07 (4)–(5): −F0 in contact, −F0(1 − h/D0) for gaps 0 ≤ h ≤ D0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Adhesion {
+    pub f0: f64,
+    pub d0: f64,
+}
+
+impl Cohesion for NoCohesion {
+    const ACTIVE: bool = false;
+    #[inline(always)]
+    fn f0(&self) -> f64 {
+        0.0
+    }
+    #[inline(always)]
+    fn d0(&self) -> f64 {
+        0.0
+    }
+}
+
+impl Cohesion for Adhesion {
+    const ACTIVE: bool = true;
+    #[inline(always)]
+    fn f0(&self) -> f64 {
+        self.f0
+    }
+    #[inline(always)]
+    fn d0(&self) -> f64 {
+        self.d0
+    }
+}
+
+/// The GRC07 interaction law with constant stiffnesses K_N, K_T.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Linear<C, F, R> {
+    pub kn: f64,
+    pub kt: f64,
+    /// ζ: fraction of critical damping, η = ζ√(4 K_N m_i m_j/(m_i+m_j)) (GRC07 (6)).
+    pub zeta: f64,
+    pub cohesion: C,
+    pub friction: F,
+    pub rolling: R,
+}
+
+/// Per-pair history: tangential spring and rolling spring (each `()` when absent).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LinearHistory<T, G> {
+    pub tangential: T,
+    pub rolling: G,
+}
+
+impl<D: Dim, C: Cohesion, F: Friction, R: RollingResistance> ContactLaw<D> for Linear<C, F, R> {
+    type History = LinearHistory<F::State<D>, R::State<D>>;
+    const MOMENTS: bool = F::ACTIVE || R::ACTIVE;
+    const ROLLING: bool = R::ACTIVE;
+
+    #[inline(always)]
+    fn range(&self) -> f64 {
+        self.cohesion.d0()
+    }
+
+    #[inline(always)]
+    fn interact(&self, p: &Pair<D>, hist: &mut Self::History, dt: f64) -> PairForce<D> {
+        if p.gap >= 0.0 {
+            *hist = Default::default();
+            if C::ACTIVE && p.gap <= self.cohesion.d0() {
+                // GRC07 (4): distant attraction, no tangential force, no viscosity.
+                let normal = -self.cohesion.f0() * (1.0 - p.gap / self.cohesion.d0());
+                return PairForce {
+                    normal,
+                    ..Default::default()
+                };
+            }
+            return PairForce::default();
+        }
+        let ne = -self.kn * p.gap;
+        let vn = p.v_contact.dot(&p.n);
+        let eta = 2.0 * self.zeta * (self.kn * p.m_eff).sqrt();
+        // GRC07 (5): N = N_e + N_v − F0.
+        let normal = ne - eta * vn - self.cohesion.f0();
+        let tangential = if F::ACTIVE {
+            let slip = (p.v_contact - p.n * vn) * dt;
+            let pivot = 0.5 * D::pivot_rate(p.w_i + p.w_j, p.n) * dt;
+            // GRC07 (8): the Coulomb cap uses the elastic repulsive part only.
+            self.friction
+                .update::<D>(&mut hist.tangential, p.n, pivot, slip, self.kt, ne)
+        } else {
+            D::V::zero()
+        };
+        let rolling = if R::ACTIVE {
+            let dtheta = D::rolling_part(p.w_j - p.w_i, p.n) * dt;
+            self.rolling.update::<D>(&mut hist.rolling, p.n, dtheta, ne)
+        } else {
+            D::Ang::zero()
+        };
+        PairForce {
+            normal,
+            normal_elastic: ne,
+            tangential,
+            rolling,
+        }
+    }
+
+    fn max_stiffness(&self, _force: f64, _r_eff_max: f64) -> f64 {
+        self.kn
+    }
+
+    fn describe(&self) -> String {
+        let mut s = format!(
+            "linear K_N={:.4e} K_T={:.4e} ζ={} μ={}",
+            self.kn,
+            self.kt,
+            self.zeta,
+            self.friction.mu()
+        );
+        if C::ACTIVE {
+            s += &format!(" F0={} D0={}", self.cohesion.f0(), self.cohesion.d0());
+        }
+        if R::ACTIVE {
+            s += " rolling-resistance";
+        }
+        s
+    }
+
+    fn stored(&self, hist: &Self::History) -> (D::V, D::Ang) {
+        (
+            F::force::<D>(&hist.tangential),
+            R::moment::<D>(&hist.rolling),
+        )
+    }
+}

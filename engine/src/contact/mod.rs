@@ -1,0 +1,66 @@
+//! Contact laws. Each law is a type implementing [`ContactLaw`]; the features a scene does not
+//! use (friction, rolling resistance, cohesion) are type parameters that compile to nothing,
+//! so a frictionless scene runs a kernel with no tangential state at all.
+//!
+//! - [`hertz_mindlin::HertzMindlin`]: AR07 (1)–(5), App. A (Walton rescaling), App. B (transport).
+//! - [`linear::Linear`]: GRC07 (4)–(10): spring–dashpot–Coulomb with optional adhesion and
+//!   rolling resistance; with no adhesion it is the classic cohesionless linear law.
+//! - [`slider`]: the elastic-plastic sliders (Coulomb and rolling) shared by both.
+
+pub mod hertz_mindlin;
+pub mod linear;
+pub mod slider;
+
+use crate::geometry::Dim;
+
+/// Kinematics of one pair, as seen by the law. `n` points from i to j.
+#[derive(Clone, Copy, Debug)]
+pub struct Pair<D: Dim> {
+    /// Unit normal from i to j.
+    pub n: D::V,
+    /// Surface gap h = |r_ij| − R_i − R_j (negative: overlap).
+    pub gap: f64,
+    /// Relative velocity of the contact point of j with respect to i.
+    pub v_contact: D::V,
+    /// Angular velocities.
+    pub w_i: D::Ang,
+    pub w_j: D::Ang,
+    /// Reduced radius R_i R_j/(R_i+R_j) and reduced mass m_i m_j/(m_i+m_j).
+    pub r_eff: f64,
+    pub m_eff: f64,
+}
+
+/// What a law returns for one pair.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PairForce<D: Dim> {
+    /// Total normal force N (repulsive positive), along n, exerted by i on j.
+    pub normal: f64,
+    /// Elastic repulsive part N_e (threshold of the sliders).
+    pub normal_elastic: f64,
+    /// Tangential force exerted by i on j.
+    pub tangential: D::V,
+    /// Rolling moment exerted by i on j.
+    pub rolling: D::Ang,
+}
+
+/// A contact (interaction) law.
+pub trait ContactLaw<D: Dim>: Copy + Send + Sync + std::fmt::Debug + 'static {
+    /// Per-pair history (tangential spring, rolling spring); `()` when there is none.
+    type History: Copy + Default + Send + Sync + std::fmt::Debug;
+    /// Does the law exert moments (friction or rolling resistance)? If not, rotations are not
+    /// integrated at all.
+    const MOMENTS: bool;
+    /// Does the law have rolling resistance?
+    const ROLLING: bool;
+    /// Largest gap at which two grains still interact (0 for contact-only laws).
+    fn range(&self) -> f64;
+    /// Force for one pair; `hist` is reset by the caller's law when the pair is not in contact.
+    fn interact(&self, p: &Pair<D>, hist: &mut Self::History, dt: f64) -> PairForce<D>;
+    /// Stiffest normal stiffness to expect, for the time step (`force` is the largest normal
+    /// force expected, in force units).
+    fn max_stiffness(&self, force: f64, r_eff_max: f64) -> f64;
+    /// Short description for logs (`hertz-mindlin μ=0.3 ζ=0.98 …`).
+    fn describe(&self) -> String;
+    /// Tangential force and rolling moment stored in the history (for snapshots).
+    fn stored(&self, hist: &Self::History) -> (D::V, D::Ang);
+}

@@ -1,0 +1,185 @@
+//! Initial states: a random non-overlapping granular gas at solid fraction Φ_I (GRC07 §III.A,
+//! AR07 §IV.A), by random sequential addition with a cell grid, largest grains first.
+
+use crate::geometry::{Dim, Linear};
+use crate::neighbor::min_image;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// Random gas: reduced positions, diameters and cell lengths.
+pub struct Gas<D: Dim> {
+    pub s: Vec<D::V>,
+    pub diameter: Vec<f64>,
+    pub l: D::V,
+}
+
+/// Diameters uniform in [d_min, 1] (GRC07 §II.A with d_min = 1/2; monodisperse when 1).
+pub fn diameters(n: usize, d_min: f64, rng: &mut ChaCha8Rng) -> Vec<f64> {
+    (0..n)
+        .map(|_| {
+            if d_min >= 1.0 {
+                1.0
+            } else {
+                rng.gen_range(d_min..=1.0)
+            }
+        })
+        .collect()
+}
+
+/// Places `n` grains at random, without overlap, in a cubic (square) cell of solid fraction
+/// `phi`. Fails with a message if the placement stalls.
+pub fn random_gas<D: Dim>(n: usize, d_min: f64, phi: f64, seed: u64) -> Result<Gas<D>, String> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut diameter = diameters(n, d_min, &mut rng);
+    // Largest first: they are the hardest to place.
+    diameter.sort_by(|a, b| b.total_cmp(a));
+    let solid: f64 = diameter.iter().map(|&d| D::grain_volume(d)).sum();
+    let side = (solid / phi).powf(1.0 / D::D as f64);
+    let mut l = D::V::zero();
+    for a in 0..D::D {
+        l[a] = side;
+    }
+    // Grid of cells of side ≥ 1 (the largest diameter).
+    let m = (side.floor() as usize).max(1);
+    let total = m.pow(D::D as u32);
+    let mut grid: Vec<Vec<u32>> = vec![Vec::new(); total];
+    let cell_index = |s: &D::V| -> [usize; 3] {
+        let mut c = [0usize; 3];
+        for a in 0..D::D {
+            c[a] = ((s[a] * m as f64) as usize).min(m - 1);
+        }
+        c
+    };
+    let flat = |c: [usize; 3]| -> usize {
+        let mut k = 0;
+        for a in (0..D::D).rev() {
+            k = k * m + c[a];
+        }
+        k
+    };
+    let mut s: Vec<D::V> = Vec::with_capacity(n);
+    let max_tries = 200_000;
+    for (k, &d) in diameter.iter().enumerate() {
+        let mut placed = false;
+        for _ in 0..max_tries {
+            let mut x = D::V::zero();
+            for a in 0..D::D {
+                x[a] = rng.gen::<f64>();
+            }
+            let c = cell_index(&x);
+            let reach: i64 = if m >= 3 { 1 } else { 0 };
+            let mut ok = true;
+            'search: for dz in -reach..=reach {
+                if D::D == 2 && dz != 0 {
+                    continue;
+                }
+                for dy in -reach..=reach {
+                    for dx in -reach..=reach {
+                        let mut cc = c;
+                        for (a, off) in [dx, dy, dz].iter().enumerate().take(D::D) {
+                            cc[a] = ((c[a] as i64 + off).rem_euclid(m as i64)) as usize;
+                        }
+                        let bucket = if m >= 3 {
+                            &grid[flat(cc)]
+                        } else {
+                            // Small cells: compare with everything placed so far.
+                            &grid[0]
+                        };
+                        for &j in bucket {
+                            let j = j as usize;
+                            let mut ds = s[j] - x;
+                            min_image::<D>(&mut ds);
+                            let r = D::mul(ds, l);
+                            let contact = 0.5 * (d + diameter[j]);
+                            if r.norm_squared() < contact * contact {
+                                ok = false;
+                                break 'search;
+                            }
+                        }
+                    }
+                }
+            }
+            if ok {
+                let slot = if m >= 3 { flat(c) } else { 0 };
+                grid[slot].push(k as u32);
+                s.push(x);
+                placed = true;
+                break;
+            }
+        }
+        if !placed {
+            return Err(format!(
+                "random placement stalled at grain {} of {n} (diameter {d:.3}) after {max_tries} tries: Φ_I = {phi} is too dense for random sequential addition; lower initial.packing_fraction",
+                k + 1
+            ));
+        }
+    }
+    Ok(Gas { s, diameter, l })
+}
+
+/// Maxwell velocities with root-mean-square speed `rms`, zero total momentum.
+pub fn maxwell_velocities<D: Dim>(mass: &[f64], rms: f64, seed: u64) -> Vec<D::V> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15);
+    let n = mass.len();
+    let mut u: Vec<D::V> = (0..n)
+        .map(|i| {
+            let mut v = D::V::zero();
+            for a in 0..D::D {
+                let g: f64 = StandardNormal.sample(&mut rng);
+                v[a] = g / mass[i].sqrt();
+            }
+            v
+        })
+        .collect();
+    let mtot: f64 = mass.iter().sum();
+    let mut p = D::V::zero();
+    for i in 0..n {
+        p += u[i] * mass[i];
+    }
+    let vcm = p * (1.0 / mtot);
+    for v in u.iter_mut() {
+        *v -= vcm;
+    }
+    let msq: f64 = u.iter().map(|v| v.norm_squared()).sum::<f64>() / n as f64;
+    if msq > 0.0 {
+        let f = rms / msq.sqrt();
+        for v in u.iter_mut() {
+            *v = *v * f;
+        }
+    }
+    u
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{D2, D3};
+
+    fn no_overlap<D: Dim>(g: &Gas<D>) {
+        for i in 0..g.s.len() {
+            for j in i + 1..g.s.len() {
+                let mut ds = g.s[j] - g.s[i];
+                min_image::<D>(&mut ds);
+                let r = D::mul(ds, g.l).norm();
+                assert!(r >= 0.5 * (g.diameter[i] + g.diameter[j]) * (1.0 - 1e-12));
+            }
+        }
+    }
+
+    #[test]
+    fn gas_reaches_fraction_without_overlap() {
+        let g = random_gas::<D2>(400, 0.5, 0.5, 7).unwrap();
+        no_overlap(&g);
+        let solid: f64 = g.diameter.iter().map(|&d| D2::grain_volume(d)).sum();
+        assert!((solid / D2::product(g.l) - 0.5).abs() < 1e-12);
+        let g3 = random_gas::<D3>(300, 1.0, 0.3, 7).unwrap();
+        no_overlap(&g3);
+    }
+
+    #[test]
+    fn too_dense_gas_is_refused() {
+        let e = random_gas::<D3>(200, 1.0, 0.6, 1).err().unwrap();
+        assert!(e.contains("initial.packing_fraction"), "{e}");
+    }
+}

@@ -1,0 +1,663 @@
+//! Scene files: one TOML file per scene (`reference-inputs/scenes/*.toml`).
+//!
+//! Everything is dimensionless, in the reduced units of [`crate::units`]: lengths in units of
+//! the largest diameter `a`, masses in units of the mass of a grain of diameter `a`, forces in
+//! units of `F0` (cohesive laws) or of `P_ref·a^(d-1)` (cohesionless laws), so that pressures
+//! in the protocol are `P/P_ref` or `P* = P a/F0` (GRC07 (12)).
+//!
+//! Parsing rejects unknown keys; [`Scene::validate`] checks every value and names the file,
+//! the field and what is allowed.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A whole scene.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Short name, used for output files.
+    pub name: String,
+    /// One line saying what the scene is and which paper section it follows.
+    #[serde(default)]
+    pub description: String,
+    /// 2 (disks) or 3 (spheres).
+    pub dimension: usize,
+    /// Seed of the random initial state.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    pub particles: Particles,
+    pub law: Law,
+    pub initial: Initial,
+    #[serde(default)]
+    pub numerics: Numerics,
+    /// Steps run in order.
+    pub protocol: Vec<Step>,
+    #[serde(default)]
+    pub output: Output,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// Number of grains and their size distribution.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Particles {
+    pub count: usize,
+    /// Smallest diameter in units of the largest one, `a` (GRC07: 0.5; monodisperse: 1).
+    #[serde(default = "one")]
+    pub min_diameter: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// Friction coefficient: a number, or `"inf"` for contacts that never slide.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mu {
+    Finite(f64),
+    Infinite,
+}
+
+impl Mu {
+    pub fn value(self) -> f64 {
+        match self {
+            Mu::Finite(x) => x,
+            Mu::Infinite => f64::INFINITY,
+        }
+    }
+}
+
+impl Serialize for Mu {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Mu::Finite(x) => s.serialize_f64(*x),
+            Mu::Infinite => s.serialize_str("inf"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Mu {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = Mu;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a non-negative number or \"inf\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, x: f64) -> Result<Mu, E> {
+                if x.is_infinite() && x > 0.0 {
+                    Ok(Mu::Infinite)
+                } else {
+                    Ok(Mu::Finite(x))
+                }
+            }
+            fn visit_i64<E: serde::de::Error>(self, x: i64) -> Result<Mu, E> {
+                Ok(Mu::Finite(x as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, x: u64) -> Result<Mu, E> {
+                Ok(Mu::Finite(x as f64))
+            }
+            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<Mu, E> {
+                match s {
+                    "inf" | "infinity" | "Infinity" => Ok(Mu::Infinite),
+                    _ => Err(E::custom(format!(
+                        "expected a non-negative number or \"inf\", found \"{s}\""
+                    ))),
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// Contact law and its dimensionless parameters.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Law {
+    /// Hertz–Mindlin spheres (AR07 §II.A, App. A, App. B).
+    HertzMindlin {
+        /// κ = (Ẽ/P_ref)^(2/3) (AR07 (21)).
+        kappa: f64,
+        /// Friction coefficient μ (0, finite or "inf").
+        mu: Mu,
+        /// Normal damping as a fraction of critical (AR07 (5)).
+        zeta: f64,
+        /// Poisson ratio ν, giving K_T/K_N = (2-2ν)/(2-ν) (AR07 (3)).
+        #[serde(default = "default_poisson")]
+        poisson: f64,
+    },
+    /// Linear spring–dashpot–Coulomb disks or spheres with optional short-range adhesion and
+    /// rolling resistance (GRC07 §II.B).
+    Linear {
+        /// κ = K_N a/F0 with cohesion, K_N/P_ref without (GRC07 §II.C).
+        kappa: f64,
+        /// Friction coefficient μ.
+        mu: Mu,
+        /// Normal damping as a fraction of critical (GRC07 (6)).
+        zeta: f64,
+        /// K_T/K_N.
+        #[serde(default = "one")]
+        kt_over_kn: f64,
+        /// Adhesion: contact pull −F0 and linear attraction over the gap range D0 (GRC07 (4)–(5)).
+        #[serde(default)]
+        cohesion: Option<Cohesion>,
+        /// Rolling resistance (GRC07 (9)–(10)).
+        #[serde(default)]
+        rolling: Option<Rolling>,
+    },
+}
+
+fn default_poisson() -> f64 {
+    0.3
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Cohesion {
+    /// Attraction range D0/a (GRC07 T.I: 1e-3).
+    pub d0: f64,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Rolling {
+    /// K_r/(K_N a²) (GRC07 T.I: 1e-4).
+    pub kr: f64,
+    /// μ_r/a (GRC07 T.I: 0.005 with μ = 0.5).
+    pub mu_r: f64,
+}
+
+/// Initial state: a random non-overlapping gas.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Initial {
+    /// Solid fraction Φ_I of the random gas.
+    pub packing_fraction: f64,
+    /// Root-mean-square speed of Maxwell velocities (reduced units); 0 = grains at rest.
+    #[serde(default)]
+    pub rms_velocity: f64,
+}
+
+/// Numerical settings; the defaults suit the papers' scenes.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Numerics {
+    /// Time step as a fraction of the shortest binary contact duration π√(m_eff/K_max).
+    pub dt_fraction: f64,
+    /// For Hertz contacts: the normal force, in units of the force scale, at which K_max is
+    /// evaluated.
+    pub stiffness_force: f64,
+    /// Verlet skin in units of a.
+    pub skin: f64,
+    /// Generalized mass of the cell as a fraction of the total grain mass (AR07 §II.B: ~1;
+    /// GRC07 §II.A: 3/10).
+    pub cell_mass: f64,
+    /// Steps between equilibrium checks and progress reports.
+    pub check_every: u64,
+    /// The run stops as unstable when an overlap exceeds this fraction of the smaller radius.
+    pub max_overlap: f64,
+}
+
+impl Default for Numerics {
+    fn default() -> Self {
+        Numerics {
+            dt_fraction: 0.02,
+            stiffness_force: 10.0,
+            skin: 0.05,
+            cell_mass: 1.0,
+            check_every: 200,
+            max_overlap: 0.1,
+        }
+    }
+}
+
+/// One protocol step.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Step {
+    /// Stress-controlled run of the periodic cell towards an isotropic pressure (AR07 (6)–(8)),
+    /// with the strain rate capped at `inertia_cap` (AR07 (23) I, or GRC08 I_a = ε̇_max T0).
+    Compress {
+        pressure: f64,
+        inertia_cap: f64,
+        max_time: f64,
+        #[serde(default)]
+        criteria: Criteria,
+    },
+    /// Fixed cell.
+    FixedVolume {
+        max_time: f64,
+        #[serde(default)]
+        criteria: Criteria,
+        /// Run the full time even when the criteria hold.
+        #[serde(default)]
+        full_time: bool,
+    },
+}
+
+impl Step {
+    pub fn max_time(&self) -> f64 {
+        match self {
+            Step::Compress { max_time, .. } | Step::FixedVolume { max_time, .. } => *max_time,
+        }
+    }
+    pub fn criteria(&self) -> &Criteria {
+        match self {
+            Step::Compress { criteria, .. } | Step::FixedVolume { criteria, .. } => criteria,
+        }
+    }
+}
+
+/// Equilibrium criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), in units of a force scale
+/// `F_ref`: `a^(d-1)·P` for `scale = "pressure"` (AR07), `F1 = max(F0, P a^(d-1))` for
+/// `scale = "cohesion"` (GRC07).
+///
+/// In a scene: `criteria = { preset = "grc07" }`, optionally with fields overriding the preset
+/// (`criteria = { preset = "ar07", force = 1e-5 }`).
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(try_from = "CriteriaTable")]
+pub struct Criteria {
+    pub scale: ForceScale,
+    /// Largest net force on a grain, in F_ref.
+    pub force: f64,
+    /// Largest net moment on a grain, in F_ref·a (not used when the law has no moments).
+    pub moment: f64,
+    /// Largest deviation of a diagonal contact stress from its target, in F_ref/a^(d-1).
+    pub pressure: f64,
+    /// Kinetic energy per grain, in F_ref·a.
+    pub kinetic: f64,
+}
+
+/// Scene form of [`Criteria`]: a preset and overrides.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CriteriaTable {
+    preset: Option<String>,
+    scale: Option<ForceScale>,
+    force: Option<f64>,
+    moment: Option<f64>,
+    pressure: Option<f64>,
+    kinetic: Option<f64>,
+}
+
+impl TryFrom<CriteriaTable> for Criteria {
+    type Error = String;
+    fn try_from(t: CriteriaTable) -> Result<Self, String> {
+        let base = match t.preset.as_deref() {
+            None | Some("ar07") => Criteria::ar07(),
+            Some("grc07") => Criteria::grc07(),
+            Some("grc08") => Criteria::grc08(),
+            Some(other) => {
+                return Err(format!(
+                    "unknown criteria preset \"{other}\", expected \"ar07\", \"grc07\" or \"grc08\""
+                ))
+            }
+        };
+        Ok(Criteria {
+            scale: t.scale.unwrap_or(base.scale),
+            force: t.force.unwrap_or(base.force),
+            moment: t.moment.unwrap_or(base.moment),
+            pressure: t.pressure.unwrap_or(base.pressure),
+            kinetic: t.kinetic.unwrap_or(base.kinetic),
+        })
+    }
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum ForceScale {
+    Pressure,
+    Cohesion,
+}
+
+impl Criteria {
+    /// AR07 §III: force < 1e-4 a²P, stress to 1e-4 P, kinetic energy < 1e-8 P a³.
+    pub fn ar07() -> Self {
+        Criteria {
+            scale: ForceScale::Pressure,
+            force: 1e-4,
+            moment: 1e-4,
+            pressure: 1e-4,
+            kinetic: 1e-8,
+        }
+    }
+    /// GRC07 §II.D.
+    pub fn grc07() -> Self {
+        Criteria {
+            scale: ForceScale::Cohesion,
+            force: 1e-4,
+            moment: 1e-4,
+            pressure: 1e-4,
+            kinetic: 5e-8,
+        }
+    }
+    /// GRC08 §II.D.1: as GRC07 with 1e-5.
+    pub fn grc08() -> Self {
+        Criteria {
+            force: 1e-5,
+            moment: 1e-5,
+            pressure: 1e-5,
+            ..Self::grc07()
+        }
+    }
+}
+
+impl Default for Criteria {
+    fn default() -> Self {
+        Self::ar07()
+    }
+}
+
+/// Where the results go (relative to the output directory given on the command line).
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Output {
+    /// Final snapshot file name.
+    pub snapshot: String,
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            snapshot: "final.snap.json".into(),
+        }
+    }
+}
+
+/// An error in a scene file, naming the file, the field and what is allowed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    pub file: PathBuf,
+    /// Dotted path of the field (`law.kappa`, `protocol[1].pressure`), empty for syntax errors.
+    pub field: String,
+    pub message: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        if self.field.is_empty() {
+            write!(f, "scene {}: {}", self.file.display(), self.message)
+        } else {
+            write!(
+                f,
+                "scene {}: field `{}`: {}",
+                self.file.display(),
+                self.field,
+                self.message
+            )
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// Largest Φ_I a random sequential placement reaches in reasonable time (RSA jamming limits:
+/// 0.547 for disks, 0.384 for spheres, a little less to leave room).
+pub fn max_random_packing_fraction(dimension: usize) -> f64 {
+    if dimension == 2 {
+        0.54
+    } else {
+        0.37
+    }
+}
+
+impl Scene {
+    /// Parses and validates a scene file.
+    pub fn from_file(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: path.to_owned(),
+            field: String::new(),
+            message: format!("cannot read the file: {e}"),
+        })?;
+        Self::from_toml(&text, path)
+    }
+
+    /// Parses and validates scene text; `path` is used in messages only.
+    pub fn from_toml(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| SceneError {
+            file: path.to_owned(),
+            field: String::new(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        scene.validate(path)?;
+        Ok(scene)
+    }
+
+    /// Checks every value; the first problem found is returned.
+    pub fn validate(&self, path: &Path) -> Result<(), SceneError> {
+        let err = |field: &str, message: String| SceneError {
+            file: path.to_owned(),
+            field: field.to_string(),
+            message,
+        };
+        let positive = |field: &str, x: f64| -> Result<(), SceneError> {
+            if x.is_finite() && x > 0.0 {
+                Ok(())
+            } else {
+                Err(err(field, format!("must be a finite number > 0, got {x}")))
+            }
+        };
+        let in_range = |field: &str, x: f64, lo: f64, hi: f64| -> Result<(), SceneError> {
+            if x.is_finite() && x >= lo && x <= hi {
+                Ok(())
+            } else {
+                Err(err(field, format!("must lie in [{lo}, {hi}], got {x}")))
+            }
+        };
+        if self.name.trim().is_empty()
+            || !self
+                .name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+        {
+            return Err(err(
+                "name",
+                format!(
+                    "must be non-empty and use only letters, digits, '-', '_' and '.', got {:?}",
+                    self.name
+                ),
+            ));
+        }
+        if self.dimension != 2 && self.dimension != 3 {
+            return Err(err(
+                "dimension",
+                format!("must be 2 (disks) or 3 (spheres), got {}", self.dimension),
+            ));
+        }
+        if self.particles.count < 2 {
+            return Err(err(
+                "particles.count",
+                format!("needs at least 2 grains, got {}", self.particles.count),
+            ));
+        }
+        if self.particles.count > u32::MAX as usize / 64 {
+            return Err(err(
+                "particles.count",
+                format!(
+                    "at most {} grains are supported, got {}",
+                    u32::MAX as usize / 64,
+                    self.particles.count
+                ),
+            ));
+        }
+        let dmin = self.particles.min_diameter;
+        if !(dmin.is_finite() && dmin > 0.0 && dmin <= 1.0) {
+            return Err(err(
+                "particles.min_diameter",
+                format!("must lie in (0, 1] (units of the largest diameter a), got {dmin}"),
+            ));
+        }
+        let check_mu = |field: &str, mu: Mu| -> Result<(), SceneError> {
+            match mu {
+                Mu::Infinite => Ok(()),
+                Mu::Finite(x) if x.is_finite() && x >= 0.0 => Ok(()),
+                Mu::Finite(x) => Err(err(
+                    field,
+                    format!("must be a number ≥ 0 or \"inf\", got {x}"),
+                )),
+            }
+        };
+        match &self.law {
+            Law::HertzMindlin {
+                kappa,
+                mu,
+                zeta,
+                poisson,
+            } => {
+                if self.dimension != 3 {
+                    return Err(err(
+                        "law.kind",
+                        "\"hertz-mindlin\" needs dimension = 3 (Hertz contacts are between spheres); use kind = \"linear\" for disks".into(),
+                    ));
+                }
+                positive("law.kappa", *kappa)?;
+                check_mu("law.mu", *mu)?;
+                in_range("law.zeta", *zeta, 0.0, 1.0)?;
+                if !(poisson.is_finite() && *poisson > -1.0 && *poisson < 0.5) {
+                    return Err(err(
+                        "law.poisson",
+                        format!("must lie in (-1, 0.5), got {poisson}"),
+                    ));
+                }
+            }
+            Law::Linear {
+                kappa,
+                mu,
+                zeta,
+                kt_over_kn,
+                cohesion,
+                rolling,
+            } => {
+                positive("law.kappa", *kappa)?;
+                check_mu("law.mu", *mu)?;
+                in_range("law.zeta", *zeta, 0.0, 1.0)?;
+                positive("law.kt_over_kn", *kt_over_kn)?;
+                if let Some(c) = cohesion {
+                    if !(c.d0.is_finite() && c.d0 > 0.0 && c.d0 < 0.5 * dmin) {
+                        return Err(err(
+                            "law.cohesion.d0",
+                            format!(
+                                "must lie in (0, {}) (units of a; less than the smallest radius), got {}",
+                                0.5 * dmin,
+                                c.d0
+                            ),
+                        ));
+                    }
+                }
+                if let Some(r) = rolling {
+                    positive("law.rolling.kr", r.kr)?;
+                    if !(r.mu_r.is_finite() && r.mu_r >= 0.0) {
+                        return Err(err(
+                            "law.rolling.mu_r",
+                            format!("must be a finite number ≥ 0 (units of a), got {}", r.mu_r),
+                        ));
+                    }
+                }
+            }
+        }
+        let phi_max = max_random_packing_fraction(self.dimension);
+        let phi = self.initial.packing_fraction;
+        if !(phi.is_finite() && phi > 0.0 && phi <= phi_max) {
+            return Err(err(
+                "initial.packing_fraction",
+                format!(
+                    "must lie in (0, {phi_max}]: a random sequential placement of {} cannot reach {phi}",
+                    if self.dimension == 2 { "disks" } else { "spheres" }
+                ),
+            ));
+        }
+        if !(self.initial.rms_velocity.is_finite() && self.initial.rms_velocity >= 0.0) {
+            return Err(err(
+                "initial.rms_velocity",
+                format!(
+                    "must be a finite number ≥ 0, got {}",
+                    self.initial.rms_velocity
+                ),
+            ));
+        }
+        let n = &self.numerics;
+        in_range("numerics.dt_fraction", n.dt_fraction, 1e-6, 0.5)?;
+        positive("numerics.stiffness_force", n.stiffness_force)?;
+        in_range("numerics.skin", n.skin, 1e-4, 1.0)?;
+        positive("numerics.cell_mass", n.cell_mass)?;
+        if n.check_every == 0 {
+            return Err(err("numerics.check_every", "must be ≥ 1".into()));
+        }
+        in_range("numerics.max_overlap", n.max_overlap, 1e-6, 1.0)?;
+        if self.protocol.is_empty() {
+            return Err(err(
+                "protocol",
+                "needs at least one step ([[protocol]] with kind = \"compress\" or \"fixed-volume\")"
+                    .into(),
+            ));
+        }
+        for (k, step) in self.protocol.iter().enumerate() {
+            let f = |name: &str| format!("protocol[{k}].{name}");
+            if let Step::Compress {
+                pressure,
+                inertia_cap,
+                ..
+            } = step
+            {
+                if !(pressure.is_finite() && *pressure >= 0.0) {
+                    return Err(err(
+                        &f("pressure"),
+                        format!("must be a finite number ≥ 0, got {pressure}"),
+                    ));
+                }
+                if *pressure == 0.0 && self.law.cohesion().is_none() {
+                    return Err(err(
+                        &f("pressure"),
+                        "must be > 0 without cohesion (a cohesionless packing cannot hold at P = 0)"
+                            .into(),
+                    ));
+                }
+                positive(&f("inertia_cap"), *inertia_cap)?;
+            }
+            positive(&f("max_time"), step.max_time())?;
+            let c = step.criteria();
+            positive(&f("criteria.force"), c.force)?;
+            positive(&f("criteria.moment"), c.moment)?;
+            positive(&f("criteria.pressure"), c.pressure)?;
+            positive(&f("criteria.kinetic"), c.kinetic)?;
+            if c.scale == ForceScale::Cohesion && self.law.cohesion().is_none() {
+                return Err(err(
+                    &f("criteria.scale"),
+                    "\"cohesion\" needs a cohesive law (law.cohesion); use \"pressure\"".into(),
+                ));
+            }
+        }
+        if self.output.snapshot.is_empty()
+            || self.output.snapshot.contains('/')
+            || self.output.snapshot.contains('\\')
+        {
+            return Err(err(
+                "output.snapshot",
+                format!(
+                    "must be a plain file name (no directories), got {:?}",
+                    self.output.snapshot
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Law {
+    pub fn cohesion(&self) -> Option<Cohesion> {
+        match self {
+            Law::Linear { cohesion, .. } => *cohesion,
+            Law::HertzMindlin { .. } => None,
+        }
+    }
+    pub fn has_moments(&self) -> bool {
+        match self {
+            Law::HertzMindlin { mu, .. } => mu.value() > 0.0,
+            Law::Linear { mu, rolling, .. } => mu.value() > 0.0 || rolling.is_some(),
+        }
+    }
+}

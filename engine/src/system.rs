@@ -1,0 +1,560 @@
+//! The particle system and one time step: velocity Verlet for the grains (AR07 (6)) and the
+//! cell lengths (AR07 (7)), with the stress of AR07 (8).
+//!
+//! Every parallel loop runs over fixed chunks and reduces in chunk order, so for a given seed
+//! results are bit-for-bit identical for any number of threads.
+
+use crate::cell::Cell;
+use crate::contact::{ContactLaw, Pair, PairForce};
+use crate::geometry::{add_outer, Dim, Linear, Tensor};
+use crate::neighbor::{min_image, wrap, NeighborList, ROW_CHUNK};
+use rayon::prelude::*;
+
+/// Grains handled per parallel task in the per-grain loops.
+const GRAIN_CHUNK: usize = 1024;
+
+/// Grains (structure of arrays), cell, neighbour list and contact law.
+#[derive(Clone, Debug)]
+pub struct System<D: Dim, L: ContactLaw<D>> {
+    pub law: L,
+    pub cell: Cell<D>,
+    /// Reduced positions s ∈ [0,1)^d; r = L·s.
+    pub s: Vec<D::V>,
+    /// Peculiar velocities u = L·ṡ (the velocity relative to the affine cell motion).
+    pub u: Vec<D::V>,
+    /// Angular velocities (left empty when the law exerts no moments).
+    pub w: Vec<D::Ang>,
+    pub radius: Vec<f64>,
+    pub mass: Vec<f64>,
+    pub inv_mass: Vec<f64>,
+    pub inv_inertia: Vec<f64>,
+    /// Net force and moment on each grain from the last force evaluation.
+    pub force: Vec<D::V>,
+    pub torque: Vec<D::Ang>,
+    /// Peculiar displacement since the last neighbour-list build.
+    pub disp: Vec<D::V>,
+    pub nlist: NeighborList<L::History>,
+    /// Per pair: force exerted by i on j, n × T, and the rolling moment (the last two only
+    /// when the law has them).
+    pair_force: Vec<D::V>,
+    pair_cross: Vec<D::Ang>,
+    pair_roll: Vec<D::Ang>,
+    /// Contact part of Ω σ (AR07 (8)) from the last force evaluation.
+    pub contact_virial: Tensor,
+    /// Kinetic part Σ m u_α u_β.
+    pub kinetic_virial: Tensor,
+    /// Largest overlap relative to the smaller radius at the last force evaluation, and the pair.
+    pub max_overlap: (f64, u32, u32),
+    pub dt: f64,
+    pub time: f64,
+    pub step: u64,
+    max_disp: f64,
+}
+
+/// Summary of one force pass over a chunk of rows.
+#[derive(Clone, Copy)]
+struct ChunkSum {
+    virial: Tensor,
+    overlap: (f64, u32, u32),
+}
+
+impl<D: Dim, L: ContactLaw<D>> System<D, L> {
+    /// A system of grains at reduced positions `s` with diameters `diameter`; masses are
+    /// (d/a)^d with a = 1 (the largest diameter) and moments of inertia c·m·d².
+    pub fn new(law: L, cell: Cell<D>, s: Vec<D::V>, diameter: &[f64], skin: f64) -> Self {
+        let n = s.len();
+        let radius: Vec<f64> = diameter.iter().map(|d| 0.5 * d).collect();
+        let mass: Vec<f64> = diameter.iter().map(|d| d.powi(D::D as i32)).collect();
+        let inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+        let inv_inertia = mass
+            .iter()
+            .zip(diameter)
+            .map(|(m, d)| 1.0 / (D::INERTIA_FACTOR * m * d * d))
+            .collect();
+        let mut sys = System {
+            law,
+            cell,
+            s,
+            u: vec![D::V::zero(); n],
+            w: if L::MOMENTS {
+                vec![D::Ang::zero(); n]
+            } else {
+                Vec::new()
+            },
+            radius,
+            mass,
+            inv_mass,
+            inv_inertia,
+            force: vec![D::V::zero(); n],
+            torque: if L::MOMENTS {
+                vec![D::Ang::zero(); n]
+            } else {
+                Vec::new()
+            },
+            disp: vec![D::V::zero(); n],
+            nlist: NeighborList::new(skin),
+            pair_force: Vec::new(),
+            pair_cross: Vec::new(),
+            pair_roll: Vec::new(),
+            contact_virial: [[0.0; 3]; 3],
+            kinetic_virial: [[0.0; 3]; 3],
+            max_overlap: (0.0, 0, 0),
+            dt: 0.0,
+            time: 0.0,
+            step: 0,
+            max_disp: 0.0,
+        };
+        for x in sys.s.iter_mut() {
+            wrap::<D>(x);
+        }
+        sys
+    }
+
+    pub fn len(&self) -> usize {
+        self.s.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.s.is_empty()
+    }
+
+    /// Listing reach: largest 2R + interaction range + skin.
+    fn reach(&self) -> f64 {
+        2.0 * self.radius.iter().cloned().fold(0.0, f64::max) + self.law.range() + self.nlist.skin
+    }
+
+    /// Rebuilds the neighbour list now.
+    pub fn rebuild(&mut self) {
+        let range = self.law.range();
+        self.nlist
+            .build::<D>(&self.s, &self.radius, &self.cell.l, range);
+        for d in self.disp.iter_mut() {
+            *d = D::V::zero();
+        }
+        self.max_disp = 0.0;
+        let np = self.nlist.pairs();
+        self.pair_force.resize(np, D::V::zero());
+        if L::MOMENTS {
+            self.pair_cross.resize(np, D::Ang::zero());
+        }
+        if L::ROLLING {
+            self.pair_roll.resize(np, D::Ang::zero());
+        }
+    }
+
+    /// Checks that the cell is large enough for the minimum-image convention.
+    pub fn check_cell(&self) -> Result<(), String> {
+        let reach = self.reach();
+        for a in 0..D::D {
+            if self.cell.l[a] < 2.0 * reach {
+                return Err(format!(
+                    "cell length L_{} = {:.4} is less than twice the interaction reach {:.4}: use more grains",
+                    a + 1,
+                    self.cell.l[a],
+                    reach
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Prepares forces for the first step (list build and one force evaluation).
+    pub fn init_forces(&mut self) {
+        self.rebuild();
+        self.compute_forces();
+        self.accumulate(0.0);
+    }
+
+    /// One velocity-Verlet step: half kick, drift, forces, half kick (grains and cell).
+    pub fn step(&mut self) {
+        let dt = self.dt;
+        let h = 0.5 * dt;
+        let erate = self.cell.strain_rate();
+        let inv_l = D::div(ones::<D>(), self.cell.l);
+        // Half kick + drift of the grains (AR07 (6): m s̈ = L⁻¹F, i.e. u̇ = F/m + ε̇·u).
+        let moments = L::MOMENTS;
+        let maxd = {
+            let force = &self.force;
+            let inv_mass = &self.inv_mass;
+            self.s
+                .par_chunks_mut(GRAIN_CHUNK)
+                .zip(self.u.par_chunks_mut(GRAIN_CHUNK))
+                .zip(self.disp.par_chunks_mut(GRAIN_CHUNK))
+                .enumerate()
+                .map(|(c, ((s, u), disp))| {
+                    let base = c * GRAIN_CHUNK;
+                    let mut m: f64 = 0.0;
+                    for k in 0..s.len() {
+                        let i = base + k;
+                        let v = u[k] + (force[i] * inv_mass[i] + D::mul(erate, u[k])) * h;
+                        u[k] = v;
+                        let step = v * dt;
+                        s[k] += D::mul(step, inv_l);
+                        wrap::<D>(&mut s[k]);
+                        disp[k] += step;
+                        m = m.max(disp[k].norm_squared());
+                    }
+                    m
+                })
+                .collect::<Vec<f64>>()
+        };
+        if moments {
+            let torque = &self.torque;
+            let inv_i = &self.inv_inertia;
+            self.w
+                .par_chunks_mut(GRAIN_CHUNK)
+                .enumerate()
+                .for_each(|(c, w)| {
+                    let base = c * GRAIN_CHUNK;
+                    for k in 0..w.len() {
+                        w[k] += torque[base + k] * (inv_i[base + k] * h);
+                    }
+                });
+        }
+        self.max_disp = maxd.into_iter().fold(0.0, f64::max).sqrt();
+        // Cell: half kick was done at the end of the previous step; drift.
+        self.cell.drift(dt);
+        if self
+            .nlist
+            .stale::<D>(self.max_disp, &self.cell.l, self.reach())
+        {
+            self.rebuild();
+        }
+        self.compute_forces();
+        self.accumulate(h);
+        let stress = self.stress();
+        self.cell.kick(&stress, dt);
+        self.time += dt;
+        self.step += 1;
+    }
+
+    /// Measured stress σ (AR07 (8)): (contact + kinetic virial)/Ω.
+    pub fn stress(&self) -> Tensor {
+        let omega = self.cell.volume();
+        let mut t = [[0.0; 3]; 3];
+        for (a, row) in t.iter_mut().enumerate() {
+            for (b, x) in row.iter_mut().enumerate() {
+                *x = (self.contact_virial[a][b] + self.kinetic_virial[a][b]) / omega;
+            }
+        }
+        t
+    }
+
+    /// Contact part of the stress only.
+    pub fn contact_stress(&self) -> Tensor {
+        let omega = self.cell.volume();
+        let mut t = self.contact_virial;
+        for row in t.iter_mut() {
+            for x in row.iter_mut() {
+                *x /= omega;
+            }
+        }
+        t
+    }
+
+    /// Geometry and kinematics of pair (i, j) as the law sees them.
+    #[inline(always)]
+    fn pair(&self, i: usize, j: usize, erate: &D::V) -> (Pair<D>, D::V, f64) {
+        let mut ds = self.s[j] - self.s[i];
+        min_image::<D>(&mut ds);
+        let r = D::mul(ds, self.cell.l);
+        let d = r.norm();
+        let ri = self.radius[i];
+        let rj = self.radius[j];
+        let n = if d > 0.0 { r * (1.0 / d) } else { r };
+        let mut v = self.u[j] - self.u[i] + D::mul(*erate, r);
+        let (w_i, w_j) = if L::MOMENTS {
+            let (wi, wj) = (self.w[i], self.w[j]);
+            v -= D::ang_cross(wi * ri + wj * rj, n);
+            (wi, wj)
+        } else {
+            (D::Ang::zero(), D::Ang::zero())
+        };
+        let mi = self.mass[i];
+        let mj = self.mass[j];
+        (
+            Pair {
+                n,
+                gap: d - ri - rj,
+                v_contact: v,
+                w_i,
+                w_j,
+                r_eff: ri * rj / (ri + rj),
+                m_eff: mi * mj / (mi + mj),
+            },
+            r,
+            ri.min(rj),
+        )
+    }
+
+    /// Force pass over all listed pairs (parallel over fixed chunks of rows).
+    fn compute_forces(&mut self) {
+        let n = self.len();
+        let dt = self.dt;
+        let erate = self.cell.strain_rate();
+        let nchunks = n.div_ceil(ROW_CHUNK);
+        struct Job<'a, H, V, A> {
+            rows: std::ops::Range<usize>,
+            first: usize,
+            hist: &'a mut [H],
+            f: &'a mut [V],
+            c: &'a mut [A],
+            g: &'a mut [A],
+        }
+        // Move the per-pair arrays out so the chunks can borrow them while `self` is shared.
+        let mut history = std::mem::take(&mut self.nlist.history);
+        let mut pair_force = std::mem::take(&mut self.pair_force);
+        let mut pair_cross = std::mem::take(&mut self.pair_cross);
+        let mut pair_roll = std::mem::take(&mut self.pair_roll);
+        let mut jobs = Vec::with_capacity(nchunks);
+        {
+            let mut hist = &mut history[..];
+            let mut f = &mut pair_force[..];
+            let mut c = &mut pair_cross[..];
+            let mut g = &mut pair_roll[..];
+            for k in 0..nchunks {
+                let rows = k * ROW_CHUNK..((k + 1) * ROW_CHUNK).min(n);
+                let first = self.nlist.row_start[rows.start] as usize;
+                let np = self.nlist.row_start[rows.end] as usize - first;
+                let (h0, h1) = std::mem::take(&mut hist).split_at_mut(np);
+                hist = h1;
+                let (f0, f1) = std::mem::take(&mut f).split_at_mut(np);
+                f = f1;
+                let (c0, c1) = std::mem::take(&mut c).split_at_mut(if L::MOMENTS { np } else { 0 });
+                c = c1;
+                let (g0, g1) = std::mem::take(&mut g).split_at_mut(if L::ROLLING { np } else { 0 });
+                g = g1;
+                jobs.push(Job {
+                    rows,
+                    first,
+                    hist: h0,
+                    f: f0,
+                    c: c0,
+                    g: g0,
+                });
+            }
+        }
+        let this = &*self;
+        let sums: Vec<ChunkSum> = jobs
+            .into_par_iter()
+            .map(|job| {
+                let mut sum = ChunkSum {
+                    virial: [[0.0; 3]; 3],
+                    overlap: (0.0, 0, 0),
+                };
+                for i in job.rows.clone() {
+                    for p in this.nlist.row(i) {
+                        let j = this.nlist.partner[p] as usize;
+                        let k = p - job.first;
+                        let (pair, r, rmin) = this.pair(i, j, &erate);
+                        let pf: PairForce<D> = this.law.interact(&pair, &mut job.hist[k], dt);
+                        let f = pair.n * pf.normal + pf.tangential;
+                        job.f[k] = f;
+                        if L::MOMENTS {
+                            job.c[k] = D::cross(pair.n, pf.tangential);
+                        }
+                        if L::ROLLING {
+                            job.g[k] = pf.rolling;
+                        }
+                        if pf.normal != 0.0 || pf.normal_elastic != 0.0 || f != D::V::zero() {
+                            add_outer::<D>(&mut sum.virial, &f, &r);
+                        }
+                        let ov = -pair.gap / rmin;
+                        if ov > sum.overlap.0 || ov.is_nan() {
+                            sum.overlap = (ov, i as u32, j as u32);
+                        }
+                    }
+                }
+                sum
+            })
+            .collect();
+        self.nlist.history = history;
+        self.pair_force = pair_force;
+        self.pair_cross = pair_cross;
+        self.pair_roll = pair_roll;
+        let mut virial = [[0.0; 3]; 3];
+        let mut overlap = (0.0, 0, 0);
+        for s in &sums {
+            for a in 0..3 {
+                for b in 0..3 {
+                    virial[a][b] += s.virial[a][b];
+                }
+            }
+            if s.overlap.0 > overlap.0 || s.overlap.0.is_nan() {
+                overlap = s.overlap;
+            }
+        }
+        self.contact_virial = virial;
+        self.max_overlap = overlap;
+    }
+
+    /// Gathers the pair forces on each grain in a fixed order, then the closing half kick.
+    fn accumulate(&mut self, h: f64) {
+        let erate = self.cell.strain_rate();
+        let nl = &self.nlist;
+        let pf = &self.pair_force;
+        let pc = &self.pair_cross;
+        let pg = &self.pair_roll;
+        let radius = &self.radius;
+        let inv_mass = &self.inv_mass;
+        let mass = &self.mass;
+        let kin: Vec<Tensor> = self
+            .force
+            .par_chunks_mut(GRAIN_CHUNK)
+            .zip(self.u.par_chunks_mut(GRAIN_CHUNK))
+            .enumerate()
+            .map(|(c, (force, u))| {
+                let base = c * GRAIN_CHUNK;
+                let mut kv = [[0.0; 3]; 3];
+                for k in 0..force.len() {
+                    let i = base + k;
+                    let mut f = D::V::zero();
+                    for p in nl.row(i) {
+                        f -= pf[p];
+                    }
+                    for q in nl.col_start[i]..nl.col_start[i + 1] {
+                        f += pf[nl.col_pair[q as usize] as usize];
+                    }
+                    force[k] = f;
+                    let v = u[k] + (f * inv_mass[i] + D::mul(erate, u[k])) * h;
+                    u[k] = v;
+                    let mv = v * mass[i];
+                    add_outer::<D>(&mut kv, &mv, &v);
+                }
+                kv
+            })
+            .collect();
+        if L::MOMENTS {
+            let inv_i = &self.inv_inertia;
+            self.torque
+                .par_chunks_mut(GRAIN_CHUNK)
+                .zip(self.w.par_chunks_mut(GRAIN_CHUNK))
+                .enumerate()
+                .for_each(|(c, (torque, w))| {
+                    let base = c * GRAIN_CHUNK;
+                    for k in 0..torque.len() {
+                        let i = base + k;
+                        let ri = radius[i];
+                        let mut t = D::Ang::zero();
+                        for p in nl.row(i) {
+                            t -= pc[p] * ri;
+                            if L::ROLLING {
+                                t -= pg[p];
+                            }
+                        }
+                        for q in nl.col_start[i]..nl.col_start[i + 1] {
+                            let p = nl.col_pair[q as usize] as usize;
+                            t -= pc[p] * ri;
+                            if L::ROLLING {
+                                t += pg[p];
+                            }
+                        }
+                        torque[k] = t;
+                        w[k] += t * (inv_i[i] * h);
+                    }
+                });
+        }
+        let mut kv = [[0.0; 3]; 3];
+        for t in &kin {
+            for a in 0..3 {
+                for b in 0..3 {
+                    kv[a][b] += t[a][b];
+                }
+            }
+        }
+        self.kinetic_virial = kv;
+    }
+
+    /// Kinetic energy (translational + rotational), peculiar velocities.
+    pub fn kinetic_energy(&self) -> f64 {
+        let mut e = 0.0;
+        for i in 0..self.len() {
+            e += 0.5 * self.mass[i] * self.u[i].norm_squared();
+        }
+        if L::MOMENTS {
+            for i in 0..self.len() {
+                e += 0.5 * self.w[i].norm_squared() / self.inv_inertia[i];
+            }
+        }
+        e
+    }
+
+    /// Largest net force and net moment on a grain.
+    pub fn max_unbalanced(&self) -> (f64, f64) {
+        let f = self
+            .force
+            .iter()
+            .map(|f| f.norm_squared())
+            .fold(0.0, f64::max)
+            .sqrt();
+        let t = self
+            .torque
+            .iter()
+            .map(|t| t.norm_squared())
+            .fold(0.0, f64::max)
+            .sqrt();
+        (f, t)
+    }
+
+    /// Solid fraction Φ.
+    pub fn packing_fraction(&self) -> f64 {
+        let solid: f64 = self.radius.iter().map(|r| D::grain_volume(2.0 * r)).sum();
+        solid / self.cell.volume()
+    }
+
+    /// Physical position of grain i in [0, L).
+    pub fn position(&self, i: usize) -> D::V {
+        D::mul(self.s[i], self.cell.l)
+    }
+
+    /// Every interacting pair with its forces, evaluated on the current state without
+    /// advancing any history.
+    pub fn interactions(&self) -> Vec<Interaction<D>> {
+        let erate = self.cell.strain_rate();
+        let mut out = Vec::new();
+        for i in 0..self.len() {
+            for p in self.nlist.row(i) {
+                let j = self.nlist.partner[p] as usize;
+                let (pair, r, _) = self.pair(i, j, &erate);
+                let mut hist = self.nlist.history[p];
+                let pf = self.law.interact(&pair, &mut hist, 0.0);
+                if pf.normal != 0.0 || pf.normal_elastic != 0.0 || pair.gap < 0.0 {
+                    let (t, g) = self.law.stored(&self.nlist.history[p]);
+                    out.push(Interaction {
+                        i,
+                        j,
+                        branch: r,
+                        normal: pf.normal,
+                        normal_elastic: pf.normal_elastic,
+                        tangential: t,
+                        rolling: g,
+                        gap: pair.gap,
+                    });
+                }
+            }
+        }
+        out
+    }
+}
+
+/// One interacting pair, for output and analysis.
+#[derive(Clone, Copy, Debug)]
+pub struct Interaction<D: Dim> {
+    pub i: usize,
+    pub j: usize,
+    pub branch: D::V,
+    pub normal: f64,
+    pub normal_elastic: f64,
+    pub tangential: D::V,
+    pub rolling: D::Ang,
+    pub gap: f64,
+}
+
+#[inline(always)]
+fn ones<D: Dim>() -> D::V {
+    let mut v = D::V::zero();
+    for a in 0..D::D {
+        v[a] = 1.0;
+    }
+    v
+}

@@ -1,0 +1,313 @@
+//! `grainbench`: run DEM scenes, analyze packings.
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand};
+use grainbench_engine::run::{Progress, RunError, RunOptions};
+use grainbench_engine::{library, snapshot, Scene, Snapshot};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+#[derive(Parser)]
+#[command(
+    name = "grainbench",
+    version,
+    about = "Periodic stress-controlled DEM for granular packings (AR07, GRC07), with packing metrics"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene (a TOML file, or the name of an embedded scene; default: `default`).
+    Run {
+        /// Scene file or embedded scene name.
+        scene: Option<String>,
+        /// Output directory (default: `runs/<scene name>`).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(long, short = 'j')]
+        threads: Option<usize>,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+        /// Exit with status 3 unless every protocol step ends at equilibrium.
+        #[arg(long)]
+        require_equilibrium: bool,
+    },
+    /// Packing metrics of a snapshot: Φ, z, z*, x0, force moments, AR07 (22) / GRC07 (18) checks.
+    Analyze {
+        snapshot: PathBuf,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// List the embedded scenes.
+    Scenes,
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let code = match dispatch(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            2
+        }
+    };
+    std::process::exit(code);
+}
+
+fn dispatch(cli: Cli) -> Result<i32> {
+    match cli.command.unwrap_or(Command::Run {
+        scene: None,
+        out: None,
+        threads: None,
+        quiet: false,
+        require_equilibrium: false,
+    }) {
+        Command::Run {
+            scene,
+            out,
+            threads,
+            quiet,
+            require_equilibrium,
+        } => run(
+            scene.as_deref().unwrap_or("default"),
+            out,
+            threads,
+            quiet,
+            require_equilibrium,
+        ),
+        Command::Analyze { snapshot, json } => analyze(&snapshot, json),
+        Command::Scenes => {
+            for (name, text) in library::SCENES {
+                let scene = Scene::from_toml(text, Path::new(name))?;
+                println!(
+                    "{name:<24} {}D N={:<6} {}",
+                    scene.dimension, scene.particles.count, scene.description
+                );
+            }
+            Ok(0)
+        }
+    }
+}
+
+/// Loads a scene from a file, or an embedded one by name.
+fn load_scene(spec: &str) -> Result<Scene> {
+    let path = Path::new(spec);
+    if path.exists() {
+        return Ok(Scene::from_file(path)?);
+    }
+    if let Some(text) = library::scene_text(spec) {
+        return Ok(Scene::from_toml(
+            text,
+            Path::new(&format!("<embedded:{spec}>")),
+        )?);
+    }
+    let names: Vec<&str> = library::SCENES.iter().map(|(n, _)| *n).collect();
+    bail!(
+        "no scene file {spec:?} and no embedded scene of that name (embedded: {}; `grainbench scenes` lists them)",
+        names.join(", ")
+    )
+}
+
+fn run(
+    spec: &str,
+    out: Option<PathBuf>,
+    threads: Option<usize>,
+    quiet: bool,
+    require_equilibrium: bool,
+) -> Result<i32> {
+    let scene = load_scene(spec)?;
+    if let Some(t) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("setting the thread count")?;
+    }
+    let out = out.unwrap_or_else(|| Path::new("runs").join(&scene.name));
+    std::fs::create_dir_all(&out)
+        .with_context(|| format!("creating the output directory {}", out.display()))?;
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // A second Ctrl-C kills at once; the first one stops cleanly at the next check.
+        let _ = ctrlc::set_handler(move || {
+            if stop.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    }
+    eprintln!(
+        "grainbench {}: scene {} ({}D, N = {}, {} threads) → {}",
+        env!("CARGO_PKG_VERSION"),
+        scene.name,
+        scene.dimension,
+        scene.particles.count,
+        rayon::current_num_threads(),
+        out.display()
+    );
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(1000);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix} {bar:30} {msg}")
+                .expect("valid template"),
+        );
+        b
+    };
+    // Without a terminal (CI logs), a plain line every few seconds instead of the bar.
+    let plain = !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mut last_line = std::time::Instant::now();
+    let mut on_progress = |p: &Progress| {
+        let c = &p.checks;
+        if plain && last_line.elapsed().as_secs_f64() >= 5.0 {
+            last_line = std::time::Instant::now();
+            eprintln!(
+                "  step {}/{} {} t={:.4e}/{:.1e} Φ={:.4} P/P₀={:.4} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}",
+                p.step_index + 1,
+                p.step_count,
+                p.step_kind,
+                p.time,
+                p.max_time,
+                c.packing_fraction,
+                c.pressure / c.pressure_target,
+                c.kinetic_per_grain,
+                c.force_ratio,
+                c.stress_ratio,
+                c.kinetic_ratio,
+                c.interactions
+            );
+        }
+        bar.set_prefix(format!(
+            "step {}/{} {}",
+            p.step_index + 1,
+            p.step_count,
+            p.step_kind
+        ));
+        bar.set_position(((p.time / p.max_time).min(1.0) * 1000.0) as u64);
+        bar.set_message(format!(
+            "t={:.4e} Φ={:.4} P/P₀={:.4} Ek/grain={:.2e} F/crit={:.2e} contacts={}",
+            p.time,
+            c.packing_fraction,
+            c.pressure / c.pressure_target,
+            c.kinetic_per_grain,
+            c.force_ratio,
+            c.interactions
+        ));
+    };
+    let result = grainbench_engine::run_scene(
+        &scene,
+        &mut RunOptions {
+            progress: Some(&mut on_progress),
+            stop: Some(&stop),
+        },
+    );
+    bar.finish_and_clear();
+    let outcome = match result {
+        Ok(o) => o,
+        Err(e @ RunError::Unstable { .. }) => {
+            let RunError::Unstable { last_good, .. } = &e else {
+                unreachable!()
+            };
+            let path = out.join("last-good.snap.json");
+            last_good.write(&path)?;
+            eprintln!("error: {e}");
+            eprintln!(
+                "the last state that passed the checks is in {}",
+                path.display()
+            );
+            return Ok(4);
+        }
+        Err(e) => return Err(e.into()),
+    };
+    let snap_path = out.join(&scene.output.snapshot);
+    outcome.snapshot.write(&snap_path)?;
+    let summary = serde_json::json!({
+        "scene": scene.name,
+        "dimension": scene.dimension,
+        "n": scene.particles.count,
+        "law": outcome.law,
+        "dt": outcome.dt,
+        "k_max": outcome.k_max,
+        "threads": rayon::current_num_threads(),
+        "wall_seconds": outcome.wall_seconds,
+        "neighbor_builds": outcome.neighbor_builds,
+        "contacts_at_threshold": outcome.contacts_at_threshold,
+        "status": outcome.snapshot.status,
+        "steps": outcome.steps,
+        "snapshot": snap_path,
+    });
+    snapshot::write_atomic(
+        &out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    println!("scene      {} — {}", scene.name, scene.description);
+    println!("law        {}", outcome.law);
+    println!(
+        "time step  dt = {:.4e} ({} of the contact duration at K_max = {:.4e})",
+        outcome.dt, scene.numerics.dt_fraction, outcome.k_max
+    );
+    for s in &outcome.steps {
+        let c = &s.checks;
+        println!(
+            "step {}    {:<12} ended at {:<11} t = {:.4e} ({} steps, {:.1} s): Φ = {:.5}, P = {:.6}, force/crit = {:.3}, Ek/crit = {:.3}, stress/crit = {:.3}",
+            s.index + 1,
+            s.kind,
+            s.end.as_str(),
+            s.time,
+            s.steps,
+            s.wall_seconds,
+            c.packing_fraction,
+            c.pressure,
+            c.force_ratio,
+            c.kinetic_ratio,
+            c.stress_ratio
+        );
+    }
+    if outcome.contacts_at_threshold > 0 {
+        println!(
+            "warning    {} contacts sit at their Coulomb or rolling threshold (GRC07 §II.D expects none at equilibrium)",
+            outcome.contacts_at_threshold
+        );
+    }
+    print!(
+        "{}",
+        grainbench_comparisons::report::to_markdown(&analysis_of(&outcome.snapshot))
+    );
+    println!("snapshot   {}", snap_path.display());
+    println!("wall time  {:.1} s", outcome.wall_seconds);
+    if outcome.snapshot.status == "interrupted" {
+        eprintln!(
+            "interrupted: the state at the stop is in {}",
+            snap_path.display()
+        );
+        return Ok(130);
+    }
+    if require_equilibrium && !outcome.equilibrated() {
+        eprintln!("not every step reached equilibrium (--require-equilibrium)");
+        return Ok(3);
+    }
+    Ok(0)
+}
+
+fn analysis_of(snap: &Snapshot) -> grainbench_comparisons::metrics::Analysis {
+    grainbench_comparisons::metrics::analyze(snap, &Default::default())
+}
+
+fn analyze(path: &Path, json: bool) -> Result<i32> {
+    let snap = Snapshot::read(path)?;
+    let a = analysis_of(&snap);
+    if json {
+        println!("{}", serde_json::to_string_pretty(&a)?);
+    } else {
+        print!("{}", grainbench_comparisons::report::to_markdown(&a));
+    }
+    Ok(0)
+}
