@@ -80,7 +80,7 @@ pub fn snapshot(
         step: 0,
         status: "equilibrium".to_string(),
         force_unit: if cohesive { "F0" } else { "P_ref a^(d-1)" }.to_string(),
-        pressure_target: 1.0,
+        pressure_target: Some(1.0),
         cohesive,
         mu,
         cell: Cell {

@@ -153,20 +153,12 @@ impl std::fmt::Display for RunError {
 impl std::error::Error for RunError {}
 
 /// Options of a run.
+#[derive(Default)]
 pub struct RunOptions<'a> {
     /// Called at every check (every `numerics.check_every` steps).
     pub progress: Option<&'a mut (dyn FnMut(&Progress) + Send)>,
     /// Set to stop the run cleanly at the next check (Ctrl-C).
     pub stop: Option<&'a AtomicBool>,
-}
-
-impl Default for RunOptions<'_> {
-    fn default() -> Self {
-        RunOptions {
-            progress: None,
-            stop: None,
-        }
-    }
 }
 
 /// Runs a validated scene to the end of its protocol.
@@ -191,7 +183,7 @@ fn dispatch_law<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome,
             // κ = (Ẽ/P_ref)^(2/3) with P_ref = 1 (AR07 (21)).
             let e = kappa.powf(1.5);
             match *mu {
-                Mu::Finite(m) if m == 0.0 => run_law::<D, _>(
+                Mu::Finite(0.0) => run_law::<D, _>(
                     scene,
                     HertzMindlin::new(e, *poisson, *zeta, Frictionless),
                     opts,
@@ -222,7 +214,7 @@ fn linear_friction<D: Dim, C: Cohesion>(
         unreachable!()
     };
     match *mu {
-        Mu::Finite(m) if m == 0.0 => linear_rolling::<D, C, _>(scene, c, Frictionless, opts),
+        Mu::Finite(0.0) => linear_rolling::<D, C, _>(scene, c, Frictionless, opts),
         Mu::Finite(m) => linear_rolling::<D, C, _>(scene, c, Coulomb { mu: m }, opts),
         Mu::Infinite => linear_rolling::<D, C, _>(scene, c, NoSlip, opts),
     }
@@ -409,7 +401,7 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
             for _ in 0..scene.numerics.check_every {
                 sys.step();
                 let (ov, i, j) = sys.max_overlap;
-                if !(ov <= scene.numerics.max_overlap) {
+                if ov.is_nan() || ov > scene.numerics.max_overlap {
                     return Err(unstable(
                         scene,
                         sys,
@@ -506,7 +498,7 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
         }
     }
     let at_threshold = contacts_at_threshold(sys, scene);
-    let snap = snapshot_of(sys, scene, status, pressure.unwrap_or(f64::NAN));
+    let snap = snapshot_of(sys, scene, status, pressure);
     Ok((reports, snap, at_threshold))
 }
 
@@ -531,8 +523,8 @@ fn unstable<D: Dim, L: ContactLaw<D>>(
             scene,
             "unstable",
             match sys.cell.control {
-                Control::Stress { target, .. } => target[0],
-                Control::Fixed => f64::NAN,
+                Control::Stress { target, .. } => Some(target[0]),
+                Control::Fixed => None,
             },
         )),
     }
@@ -562,11 +554,11 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(
     let mut ke_t = 0.0;
     let mut ke_r = 0.0;
     let mut ke_free = 0.0;
-    for i in 0..sys.len() {
+    for (i, &touch) in touching.iter().enumerate() {
         ke_t += 0.5 * sys.mass[i] * sys.u[i].norm_squared();
         if L::MOMENTS {
             let e = 0.5 * sys.w[i].norm_squared() / sys.inv_inertia[i];
-            if touching[i] {
+            if touch {
                 ke_r += e;
             } else {
                 ke_free += e;
@@ -632,7 +624,7 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
     scene: &Scene,
     status: &str,
-    pressure_target: f64,
+    pressure_target: Option<f64>,
 ) -> Snapshot {
     let n = sys.len();
     let cohesive = scene.law.cohesion().is_some();

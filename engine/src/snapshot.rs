@@ -32,9 +32,10 @@ pub struct Snapshot {
     /// How the run that wrote it ended: `equilibrium`, `time-limit`, `unstable`, `interrupted`,
     /// or `imported`.
     pub status: String,
-    /// Force unit: `F0` or `P_ref a^(d-1)`; `pressure_target` is in force unit / a^(d-1).
+    /// Force unit: `F0` or `P_ref a^(d-1)`; `pressure_target` is in force unit / a^(d-1)
+    /// (`null` when no pressure was prescribed: a fixed cell from the start).
     pub force_unit: String,
-    pub pressure_target: f64,
+    pub pressure_target: Option<f64>,
     /// Does the law carry attraction (cohesion)? Decides the contact-counting rule.
     pub cohesive: bool,
     /// Friction coefficient (`null` for μ = ∞).

@@ -253,14 +253,20 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     }
 
     /// Geometry and kinematics of pair (i, j) as the law sees them.
+    /// `None` when the pair is out of the law's range (checked before any square root).
     #[inline(always)]
-    fn pair(&self, i: usize, j: usize, erate: &D::V) -> (Pair<D>, D::V, f64) {
+    fn pair(&self, i: usize, j: usize, erate: &D::V, range: f64) -> Option<(Pair<D>, D::V, f64)> {
         let mut ds = self.s[j] - self.s[i];
         min_image::<D>(&mut ds);
         let r = D::mul(ds, self.cell.l);
-        let d = r.norm();
         let ri = self.radius[i];
         let rj = self.radius[j];
+        let d2 = r.norm_squared();
+        let cut = ri + rj + range;
+        if d2 >= cut * cut {
+            return None;
+        }
+        let d = d2.sqrt();
         let n = if d > 0.0 { r * (1.0 / d) } else { r };
         let mut v = self.u[j] - self.u[i] + D::mul(*erate, r);
         let (w_i, w_j) = if L::MOMENTS {
@@ -272,7 +278,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         };
         let mi = self.mass[i];
         let mj = self.mass[j];
-        (
+        Some((
             Pair {
                 n,
                 gap: d - ri - rj,
@@ -284,7 +290,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             },
             r,
             ri.min(rj),
-        )
+        ))
     }
 
     /// Force pass over all listed pairs (parallel over fixed chunks of rows).
@@ -292,6 +298,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         let n = self.len();
         let dt = self.dt;
         let erate = self.cell.strain_rate();
+        let range = self.law.range();
         let nchunks = n.div_ceil(ROW_CHUNK);
         struct Job<'a, H, V, A> {
             rows: std::ops::Range<usize>,
@@ -346,7 +353,17 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                     for p in this.nlist.row(i) {
                         let j = this.nlist.partner[p] as usize;
                         let k = p - job.first;
-                        let (pair, r, rmin) = this.pair(i, j, &erate);
+                        let Some((pair, r, rmin)) = this.pair(i, j, &erate, range) else {
+                            job.hist[k] = Default::default();
+                            job.f[k] = D::V::zero();
+                            if L::MOMENTS {
+                                job.c[k] = D::Ang::zero();
+                            }
+                            if L::ROLLING {
+                                job.g[k] = D::Ang::zero();
+                            }
+                            continue;
+                        };
                         let pf: PairForce<D> = this.law.interact(&pair, &mut job.hist[k], dt);
                         let f = pair.n * pf.normal + pf.tangential;
                         job.f[k] = f;
@@ -356,12 +373,12 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                         if L::ROLLING {
                             job.g[k] = pf.rolling;
                         }
-                        if pf.normal != 0.0 || pf.normal_elastic != 0.0 || f != D::V::zero() {
-                            add_outer::<D>(&mut sum.virial, &f, &r);
-                        }
-                        let ov = -pair.gap / rmin;
-                        if ov > sum.overlap.0 || ov.is_nan() {
-                            sum.overlap = (ov, i as u32, j as u32);
+                        add_outer::<D>(&mut sum.virial, &f, &r);
+                        if !(pair.gap >= 0.0) {
+                            let ov = -pair.gap / rmin;
+                            if ov > sum.overlap.0 || ov.is_nan() {
+                                sum.overlap = (ov, i as u32, j as u32);
+                            }
                         }
                     }
                 }
@@ -375,11 +392,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         let mut virial = [[0.0; 3]; 3];
         let mut overlap = (0.0, 0, 0);
         for s in &sums {
-            for a in 0..3 {
-                for b in 0..3 {
-                    virial[a][b] += s.virial[a][b];
-                }
-            }
+            add_tensor(&mut virial, &s.virial);
             if s.overlap.0 > overlap.0 || s.overlap.0.is_nan() {
                 overlap = s.overlap;
             }
@@ -456,11 +469,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         }
         let mut kv = [[0.0; 3]; 3];
         for t in &kin {
-            for a in 0..3 {
-                for b in 0..3 {
-                    kv[a][b] += t[a][b];
-                }
-            }
+            add_tensor(&mut kv, t);
         }
         self.kinetic_virial = kv;
     }
@@ -515,7 +524,9 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         for i in 0..self.len() {
             for p in self.nlist.row(i) {
                 let j = self.nlist.partner[p] as usize;
-                let (pair, r, _) = self.pair(i, j, &erate);
+                let Some((pair, r, _)) = self.pair(i, j, &erate, self.law.range()) else {
+                    continue;
+                };
                 let mut hist = self.nlist.history[p];
                 let pf = self.law.interact(&pair, &mut hist, 0.0);
                 if pf.normal != 0.0 || pf.normal_elastic != 0.0 || pair.gap < 0.0 {
@@ -548,6 +559,14 @@ pub struct Interaction<D: Dim> {
     pub tangential: D::V,
     pub rolling: D::Ang,
     pub gap: f64,
+}
+
+fn add_tensor(acc: &mut Tensor, t: &Tensor) {
+    for (ra, rt) in acc.iter_mut().zip(t) {
+        for (a, b) in ra.iter_mut().zip(rt) {
+            *a += b;
+        }
+    }
 }
 
 #[inline(always)]
