@@ -661,3 +661,73 @@ impl Law {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = include_str!("../../reference-inputs/scenes/grc07-cohesive-small.toml");
+
+    fn err(text: &str) -> SceneError {
+        Scene::from_toml(text, Path::new("s.toml")).unwrap_err()
+    }
+
+    #[test]
+    fn valid_scene_parses_with_presets() {
+        let s = Scene::from_toml(BASE, Path::new("s.toml")).unwrap();
+        assert_eq!(s.protocol[0].criteria(), &Criteria::grc07());
+        assert!(s.law.cohesion().is_some());
+    }
+
+    #[test]
+    fn errors_name_the_field_and_what_is_allowed() {
+        let e = err(&BASE.replace("zeta = 0.8", "zeta = 1.5"));
+        assert_eq!(e.field, "law.zeta");
+        assert!(e.to_string().contains("s.toml") && e.to_string().contains("[0, 1]"));
+        let e = err(&BASE.replace("d0 = 1e-3", "d0 = 0.3"));
+        assert_eq!(e.field, "law.cohesion.d0");
+        let e = err(&BASE.replace("pressure = 0.01", "pressure = -1"));
+        assert_eq!(e.field, "protocol[0].pressure");
+        let e = err(&BASE.replace("dimension = 2", "dimension = 4"));
+        assert_eq!(e.field, "dimension");
+        let e = err(&BASE.replace("mu = 0.5", "mu = \"lots\""));
+        assert!(e.message.contains("inf"), "{e}");
+        let e = err(&BASE.replace("preset = \"grc07\"", "preset = \"grc09\""));
+        assert!(e.message.contains("grc08"), "{e}");
+        let e = err(&BASE.replace("packing_fraction = 0.36", "packing_fraction = 0.6"));
+        assert_eq!(e.field, "initial.packing_fraction");
+        // Cohesion-scaled criteria need a cohesive law; zero pressure needs cohesion.
+        let no_coh = BASE.replace("cohesion = { d0 = 1e-3 }\n", "");
+        assert_eq!(err(&no_coh).field, "protocol[0].criteria.scale");
+        let e = err(&BASE
+            .replace("pressure = 0.01", "pressure = 0.0")
+            .replace("cohesion = { d0 = 1e-3 }\n", ""));
+        assert_eq!(e.field, "protocol[0].pressure");
+        // Hertz needs spheres.
+        let e = err(&BASE
+            .replace("kind = \"linear\"", "kind = \"hertz-mindlin\"")
+            .replace("kt_over_kn = 1\n", ""));
+        assert!(!e.message.is_empty());
+    }
+
+    #[test]
+    fn unknown_keys_are_refused() {
+        let e = err(&BASE.replace("seed = 1", "seed = 1\nsede = 2"));
+        assert!(e.message.contains("sede"), "{e}");
+        let e = err(&BASE.replace("zeta = 0.8", "zeta = 0.8\nkappa_t = 3"));
+        assert!(e.message.contains("kappa_t"), "{e}");
+    }
+
+    #[test]
+    fn infinite_friction_is_a_keyword() {
+        let s =
+            Scene::from_toml(&BASE.replace("mu = 0.5", "mu = \"inf\""), Path::new("s")).unwrap();
+        assert!(matches!(
+            s.law,
+            Law::Linear {
+                mu: Mu::Infinite,
+                ..
+            }
+        ));
+    }
+}
