@@ -228,12 +228,22 @@ fn bench_step<D: Dim, L: ContactLaw<D>>(c: &mut Criterion, name: &str, sys: &Sys
 
 fn steps_then_report<D: Dim, L: ContactLaw<D>>(what: &str, sys: &System<D, L>, steps: usize) {
     let mut s = sys.clone();
+    let builds = s.nlist.builds;
+    let start = Instant::now();
     rayon::scope(|_| {
         for _ in 0..steps {
             s.step();
         }
     });
-    report(&format!("{what} after {steps} steps"), &s);
+    let wall = start.elapsed().as_secs_f64();
+    report(
+        &format!(
+            "{what} after {steps} more steps ({} list rebuilds, {:.0} µs/step on the global pool)",
+            s.nlist.builds - builds,
+            1e6 * wall / steps as f64
+        ),
+        &s,
+    );
 }
 
 fn hertz_mindlin(c: &mut Criterion) {

@@ -1,24 +1,23 @@
-//! Memory use of a dense packing: peak resident memory (VmHWM) and the steady-state heap of
-//! the system, per particle.
+//! Memory use of the dense packings of `benches/step.rs`: peak resident memory (VmHWM) and
+//! the steady-state heap of the system, per particle.
 //!
 //! ```text
 //! cargo run --release -p grainbench-engine --example memory [N3D] [N2D]
 //! ```
 //!
-//! Prepares the dense 3D Hertz–Mindlin packing of `benches/step.rs` (μ = 0.3, κ = 39000,
-//! ζ = 0.98) with `N3D` spheres (default 4000) and the 2D adhesive disk packing with rolling
-//! resistance with `N2D` disks (default 1400), runs 100 steps on each, and prints bytes per
-//! particle. Each case runs in a child process of its own so that the high-water marks do not
-//! mix.
+//! Prepares the dense 3D Hertz–Mindlin packing (μ = 0.3, κ = 39000, ζ = 0.98) with `N3D`
+//! spheres (default 4000) and the 2D adhesive disk packing with rolling resistance with `N2D`
+//! disks (default 1400), exactly as the benchmark does, runs 100 steps on each and prints
+//! bytes per particle. Each case runs in a child process of its own so that the high-water
+//! marks do not mix.
 
-use grainbench_engine::cell::Control;
 use grainbench_engine::contact::hertz_mindlin::HertzMindlin;
 use grainbench_engine::contact::linear::{Adhesion, Linear};
 use grainbench_engine::contact::slider::{Coulomb, RollingSpring};
 use grainbench_engine::contact::ContactLaw;
-use grainbench_engine::geometry::{Dim, Linear as _, D2, D3};
-use grainbench_engine::run::{build_system, run_protocol, RunOptions};
-use grainbench_engine::scene::Scene;
+use grainbench_engine::geometry::{Dim, D2, D3};
+use grainbench_engine::run::{build_system, run_protocol, Progress, RunOptions};
+use grainbench_engine::scene::{Law, Scene};
 use grainbench_engine::system::System;
 use std::mem::size_of;
 use std::path::Path;
@@ -26,10 +25,9 @@ use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-type Hm = HertzMindlin<Coulomb>;
-type Adh = Linear<Adhesion, Coulomb, RollingSpring>;
+// ---- Preparation: the same as in benches/step.rs (keep in sync). ----
 
-/// 3D Hertz–Mindlin scene: gas at Φ = 0.36 compressed at P = 1 with a large inertia cap.
+/// 3D Hertz–Mindlin scene: gas at Φ = 0.36 compressed at P = 1, inertia cap 0.1.
 fn scene_3d(n: usize) -> Scene {
     let text = format!(
         r#"
@@ -57,7 +55,8 @@ max_time = 5.0
     Scene::from_toml(&text, Path::new("bench-hm3d.toml")).expect("3D bench scene")
 }
 
-/// 2D adhesive disks with rolling resistance (GRC07 T.I parameters), compressed at P* = 1.
+/// 2D adhesive disks with rolling resistance (GRC07 T.I parameters), compressed at P* = 1,
+/// inertia cap 0.05.
 fn scene_2d(n: usize) -> Scene {
     let text = format!(
         r#"
@@ -82,28 +81,30 @@ cell_mass = 0.01
 kind = "compress"
 pressure = 1.0
 inertia_cap = 0.05
-max_time = 40.0
+max_time = 6.0
 criteria = {{ preset = "grc07" }}
 "#
     );
     Scene::from_toml(&text, Path::new("bench-adh2d.toml")).expect("2D bench scene")
 }
 
-fn law_3d(scene: &Scene) -> Hm {
-    let grainbench_engine::scene::Law::HertzMindlin {
+/// The Hertz–Mindlin law of a scene, with the friction kind `f` (as `run::dispatch_law`).
+fn law_3d<F>(scene: &Scene, f: F) -> HertzMindlin<F> {
+    let Law::HertzMindlin {
         kappa,
-        mu,
         zeta,
         poisson,
+        ..
     } = scene.law
     else {
         unreachable!()
     };
-    HertzMindlin::new(kappa.powf(1.5), poisson, zeta, Coulomb { mu: mu.value() })
+    // κ = (Ẽ/P_ref)^(2/3).
+    HertzMindlin::new(kappa.powf(1.5), poisson, zeta, f)
 }
 
-fn law_2d(scene: &Scene) -> Adh {
-    let grainbench_engine::scene::Law::Linear {
+fn law_2d(scene: &Scene) -> Linear<Adhesion, Coulomb, RollingSpring> {
+    let Law::Linear {
         kappa,
         mu,
         zeta,
@@ -128,29 +129,31 @@ fn law_2d(scene: &Scene) -> Adh {
     }
 }
 
-/// Contacts (overlapping pairs).
+/// Overlapping pairs.
 fn contacts<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> usize {
     sys.interactions().iter().filter(|c| c.gap < 0.0).count()
 }
 
-/// Compresses the gas of `scene` until Φ ≥ `phi_stop` (or the scene's max_time), then fixes
-/// the cell.
+fn report<D: Dim, L: ContactLaw<D>>(what: &str, sys: &System<D, L>) {
+    let z = contacts(sys);
+    eprintln!(
+        "{what}: N = {}, Φ = {:.4}, contacts = {z} (z = {:.2}), listed pairs = {}, dt = {:.3e}",
+        sys.len(),
+        sys.packing_fraction(),
+        2.0 * z as f64 / sys.len() as f64,
+        sys.nlist.pairs(),
+        sys.dt
+    );
+}
+
+/// Compresses the gas of `scene` until Φ ≥ `phi_stop` (or the step's max_time). The cell
+/// stays stress-controlled: at a fixed volume the unequilibrated packing, still below its
+/// jamming density, would lose most of its contacts within a few hundred steps.
 fn prepare<D: Dim, L: ContactLaw<D>>(scene: &Scene, law: L, phi_stop: f64) -> System<D, L> {
     let start = Instant::now();
     let mut sys = build_system::<D, L>(scene, law).expect("build_system");
     let stop = AtomicBool::new(false);
-    let mut progress = |p: &grainbench_engine::run::Progress| {
-        if std::env::var_os("VERBOSE").is_some() {
-            eprintln!(
-                "t={:.3} steps={} phi={:.4} P={:.3e} inter={} ke={:.3e}",
-                p.time,
-                p.steps,
-                p.checks.packing_fraction,
-                p.checks.pressure,
-                p.checks.interactions,
-                p.checks.kinetic_per_grain
-            );
-        }
+    let mut progress = |p: &Progress| {
         if p.checks.packing_fraction >= phi_stop {
             stop.store(true, Ordering::Relaxed);
         }
@@ -159,23 +162,23 @@ fn prepare<D: Dim, L: ContactLaw<D>>(scene: &Scene, law: L, phi_stop: f64) -> Sy
         progress: Some(&mut progress),
         stop: Some(&stop),
     };
-    run_protocol(scene, &mut sys, &mut opts).expect("preparation run");
-    sys.cell.control = Control::Fixed;
-    sys.cell.ldot = D::V::zero();
-    eprintln!(
-        "prepared {}: N = {}, Φ = {:.4}, contacts = {} (z = {:.2}), {} steps, {:.1} s",
-        scene.name,
-        sys.len(),
-        sys.packing_fraction(),
-        contacts(&sys),
-        2.0 * contacts(&sys) as f64 / sys.len() as f64,
-        sys.step,
-        start.elapsed().as_secs_f64()
+    // On a pool worker, as `run_scene` does.
+    rayon::scope(|_| run_protocol(scene, &mut sys, &mut opts)).expect("preparation run");
+    report(
+        &format!(
+            "prepared {} in {} steps, {:.1} s",
+            scene.name,
+            sys.step,
+            start.elapsed().as_secs_f64()
+        ),
+        &sys,
     );
     sys
 }
 
-/// A field of /proc/self/status, in bytes.
+// ---- Memory. ----
+
+/// A field of /proc/self/status (kB there), in bytes.
 fn proc_status(field: &str) -> Option<usize> {
     let text = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = text.lines().find(|l| l.starts_with(field))?;
@@ -183,9 +186,25 @@ fn proc_status(field: &str) -> Option<usize> {
     Some(kb * 1024)
 }
 
-/// Resets VmHWM to the current RSS (Linux ≥ 4.0); false when not permitted.
+/// Resets VmHWM to the current RSS (Linux ≥ 4.0); false where not permitted.
 fn reset_peak() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// Hands the memory the allocator keeps after `free` back to the system, so that the RSS
+/// shows the live data (glibc only); false where not available.
+fn trim_heap() -> bool {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        extern "C" {
+            fn malloc_trim(pad: usize) -> i32;
+        }
+        // SAFETY: glibc's malloc_trim takes no pointers and may be called at any time.
+        unsafe { malloc_trim(0) };
+        true
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    false
 }
 
 fn bytes<T>(v: &Vec<T>) -> usize {
@@ -195,6 +214,8 @@ fn bytes<T>(v: &Vec<T>) -> usize {
 /// Heap held by the system between steps, from the vector capacities.
 fn heap<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> Vec<(&'static str, usize)> {
     let nl = &sys.nlist;
+    // The per-pair force arrays are private: pairs × element size (a lower bound, `resize`
+    // may have left spare capacity).
     let np = nl.pairs();
     let mut pair_arrays = np * size_of::<D::V>();
     if L::MOMENTS {
@@ -205,7 +226,7 @@ fn heap<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> Vec<(&'static str, usiz
     }
     vec![
         (
-            "per grain: s, u, w, force, torque, disp",
+            "grains: s, u, w, force, torque, disp",
             bytes(&sys.s)
                 + bytes(&sys.u)
                 + bytes(&sys.w)
@@ -214,82 +235,86 @@ fn heap<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> Vec<(&'static str, usiz
                 + bytes(&sys.disp),
         ),
         (
-            "per grain: radius, mass, inv_mass, inv_inertia",
+            "grains: radius, mass, inv_mass, inv_inertia",
             bytes(&sys.radius) + bytes(&sys.mass) + bytes(&sys.inv_mass) + bytes(&sys.inv_inertia),
         ),
         (
-            "neighbour list: row_start, partner, col_start, col_pair",
+            "list: row_start, partner, col_start, col_pair",
             bytes(&nl.row_start)
                 + bytes(&nl.partner)
                 + bytes(&nl.col_start)
                 + bytes(&nl.col_pair)
                 + bytes(&nl.l_build),
         ),
-        ("neighbour list: contact history", bytes(&nl.history)),
-        (
-            "per-pair forces (private; pairs × element size)",
-            pair_arrays,
-        ),
+        ("list: contact history", bytes(&nl.history)),
+        ("pair forces/moments (pairs × size)", pair_arrays),
     ]
 }
 
 fn measure<D: Dim, L: ContactLaw<D>>(label: &str, scene: &Scene, law: L, phi_stop: f64) {
-    let baseline = proc_status("VmRSS:").unwrap_or(0);
+    let start_rss = proc_status("VmRSS:").unwrap_or(0);
     let mut sys = prepare::<D, L>(scene, law, phi_stop);
     let n = sys.len();
     let peak_prep = proc_status("VmHWM:").unwrap_or(0);
+    let rss_prepared = proc_status("VmRSS:").unwrap_or(0);
+    // Drop what the preparation freed (gas placement grid, the run's last-good copy, the
+    // snapshot) but the allocator kept, so that the peak over the steps shows the live data
+    // and the transients of a step.
+    let trimmed = trim_heap();
+    let rss_trimmed = proc_status("VmRSS:").unwrap_or(0);
     let reset = reset_peak();
     for _ in 0..100 {
         sys.step();
     }
-    let peak_all = proc_status("VmHWM:").unwrap_or(0).max(peak_prep);
     let peak_steps = proc_status("VmHWM:").unwrap_or(0);
-    let rss = proc_status("VmRSS:").unwrap_or(0);
+    let peak_all = peak_steps.max(peak_prep);
     let per = |b: usize| b as f64 / n as f64;
+    let above = |b: usize| per(b.saturating_sub(start_rss));
     println!(
-        "== {label}: N = {n}, listed pairs = {} ({:.2} per grain), contacts = {}, Φ = {:.4}",
+        "== {label}: N = {n}, Φ = {:.4}, listed pairs = {} ({:.2} per grain), contacts = {}",
+        sys.packing_fraction(),
         sys.nlist.pairs(),
-        sys.nlist.pairs() as f64 / n as f64,
-        contacts(&sys),
-        sys.packing_fraction()
+        per(sys.nlist.pairs()),
+        contacts(&sys)
     );
+    println!("  RSS at start (runtime, before the system):  {start_rss:>10} B");
     println!(
-        "  RSS at start (runtime, before any allocation): {:>10} B",
-        baseline
-    );
-    println!(
-        "  peak RSS (VmHWM), preparation + 100 steps:    {:>10} B = {:>8.0} B/particle ({:.0} B/particle above the start)",
-        peak_all,
+        "  peak RSS (VmHWM), preparation + 100 steps:  {peak_all:>10} B = {:>6.0} B/particle, {:>6.0} B/particle above the start",
         per(peak_all),
-        per(peak_all.saturating_sub(baseline))
+        above(peak_all)
     );
+    println!(
+        "  RSS once prepared:                          {rss_prepared:>10} B = {:>6.0} B/particle, {:>6.0} B/particle above the start",
+        per(rss_prepared),
+        above(rss_prepared)
+    );
+    if trimmed {
+        println!(
+            "  RSS once prepared, after malloc_trim:       {rss_trimmed:>10} B = {:>6.0} B/particle, {:>6.0} B/particle above the start",
+            per(rss_trimmed),
+            above(rss_trimmed)
+        );
+    }
     if reset {
         println!(
-            "  peak RSS over the 100 steps alone:            {:>10} B = {:>8.0} B/particle ({:.0} B/particle above the start)",
-            peak_steps,
+            "  peak RSS during the 100 steps alone:        {peak_steps:>10} B = {:>6.0} B/particle, {:>6.0} B/particle above the start",
             per(peak_steps),
-            per(peak_steps.saturating_sub(baseline))
+            above(peak_steps)
         );
     } else {
         println!("  (/proc/self/clear_refs not writable: no separate peak for the steps)");
     }
-    println!(
-        "  RSS after the steps:                          {:>10} B = {:>8.0} B/particle",
-        rss,
-        per(rss)
-    );
     let parts = heap(&sys);
     let total: usize = parts.iter().map(|p| p.1).sum();
     println!(
-        "  steady-state heap of the System (capacities): {:>10} B = {:>8.0} B/particle",
-        total,
+        "  steady-state heap of the System:            {total:>10} B = {:>6.0} B/particle",
         per(total)
     );
     for (name, b) in &parts {
-        println!("    {name:<56} {:>8.1} B/particle", per(*b));
+        println!("    {name:<44} {:>6.1} B/particle", per(*b));
     }
     println!(
-        "  sizes: V = {} B, Ang = {} B, History = {} B",
+        "  element sizes: V = {} B, Ang = {} B, History = {} B",
         size_of::<D::V>(),
         size_of::<D::Ang>(),
         size_of::<L::History>()
@@ -300,17 +325,19 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     if args.len() >= 4 && args[1] == "--case" {
         let n: usize = args[3].parse().expect("N");
-        // Run on a pool worker, as `run_scene` does.
-        rayon::scope(|_| match args[2].as_str() {
-            "3d" => {
-                let scene = scene_3d(n);
-                measure::<D3, Hm>("3D Hertz–Mindlin μ = 0.3", &scene, law_3d(&scene), 0.58)
+        if args[2] == "3d" {
+            let mut scene = scene_3d(n);
+            if n > 8000 {
+                // Random sequential addition stalls at Φ_I = 0.36 for large N.
+                scene.initial.packing_fraction = 0.33;
+                eprintln!("N = {n} > 8000: initial packing fraction 0.33 instead of 0.36");
             }
-            _ => {
-                let scene = scene_2d(n);
-                measure::<D2, Adh>("2D adhesive disks + rolling", &scene, law_2d(&scene), 0.80)
-            }
-        });
+            let law = law_3d(&scene, Coulomb { mu: 0.3 });
+            measure::<D3, _>("hm3d_mu0.3", &scene, law, 0.58);
+        } else {
+            let scene = scene_2d(n);
+            measure::<D2, _>("adh2d_rr", &scene, law_2d(&scene), 0.76);
+        }
         return;
     }
     let n3: usize = args.get(1).map_or(4000, |a| a.parse().expect("N3D"));

@@ -159,9 +159,10 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     }
 
     /// Prepares forces for the first step (list build and one force evaluation).
+    /// The springs are not advanced (no time passes).
     pub fn init_forces(&mut self) {
         self.rebuild();
-        self.compute_forces();
+        self.compute_forces(0.0);
         self.accumulate(0.0);
     }
 
@@ -220,7 +221,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         {
             self.rebuild();
         }
-        self.compute_forces();
+        self.compute_forces(dt);
         self.accumulate(h);
         let stress = self.stress();
         self.cell.kick(&stress, dt);
@@ -294,9 +295,8 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     }
 
     /// Force pass over all listed pairs (parallel over fixed chunks of rows).
-    fn compute_forces(&mut self) {
+    fn compute_forces(&mut self, dt: f64) {
         let n = self.len();
-        let dt = self.dt;
         let erate = self.cell.strain_rate();
         let range = self.law.range();
         let nchunks = n.div_ceil(ROW_CHUNK);

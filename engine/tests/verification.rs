@@ -842,7 +842,6 @@ fn frictionless_exerts_no_tangential_force() {
 /// from a configuration with sliding or rolling contacts (e.g. a reloaded packing) loads the
 /// springs by one spurious step.
 #[test]
-#[ignore = "engine bug: System::init_forces passes dt to the laws and advances the springs"]
 fn init_forces_does_not_advance_history() {
     let law = Linear {
         kn: 1e5,
