@@ -374,7 +374,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                             job.g[k] = pf.rolling;
                         }
                         add_outer::<D>(&mut sum.virial, &f, &r);
-                        if !(pair.gap >= 0.0) {
+                        if pair.gap < 0.0 || pair.gap.is_nan() {
                             let ov = -pair.gap / rmin;
                             if ov > sum.overlap.0 || ov.is_nan() {
                                 sum.overlap = (ov, i as u32, j as u32);
