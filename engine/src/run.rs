@@ -689,7 +689,11 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
             mass: sys.mass.clone(),
             position: (0..n).map(|i| sys.position(i).to_vec()).collect(),
             velocity: sys.u.iter().map(|v| v.to_vec()).collect(),
-            angular_velocity: sys.w.iter().map(|w| w.to_vec()).collect(),
+            angular_velocity: if L::MOMENTS {
+                sys.w.iter().map(|w| w.to_vec()).collect()
+            } else {
+                Vec::new()
+            },
         },
         contacts,
     }

@@ -11,7 +11,7 @@ use crate::neighbor::{min_image, wrap, NeighborList, ROW_CHUNK};
 use rayon::prelude::*;
 
 /// Grains handled per parallel task in the per-grain loops.
-const GRAIN_CHUNK: usize = 1024;
+const GRAIN_CHUNK: usize = 256;
 
 /// Grains (structure of arrays), cell, neighbour list and contact law.
 #[derive(Clone, Debug)]
@@ -76,21 +76,15 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             cell,
             s,
             u: vec![D::V::zero(); n],
-            w: if L::MOMENTS {
-                vec![D::Ang::zero(); n]
-            } else {
-                Vec::new()
-            },
+            // Allocated for every law so the per-grain loops can zip over them; never read
+            // or written in the hot loops when the law exerts no moments.
+            w: vec![D::Ang::zero(); n],
             radius,
             mass,
             inv_mass,
             inv_inertia,
             force: vec![D::V::zero(); n],
-            torque: if L::MOMENTS {
-                vec![D::Ang::zero(); n]
-            } else {
-                Vec::new()
-            },
+            torque: vec![D::Ang::zero(); n],
             disp: vec![D::V::zero(); n],
             nlist: NeighborList::new(skin),
             pair_force: Vec::new(),
@@ -173,16 +167,18 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         let erate = self.cell.strain_rate();
         let inv_l = D::div(ones::<D>(), self.cell.l);
         // Half kick + drift of the grains (AR07 (6): m s̈ = L⁻¹F, i.e. u̇ = F/m + ε̇·u).
-        let moments = L::MOMENTS;
         let maxd = {
             let force = &self.force;
+            let torque = &self.torque;
             let inv_mass = &self.inv_mass;
+            let inv_i = &self.inv_inertia;
             self.s
                 .par_chunks_mut(GRAIN_CHUNK)
                 .zip(self.u.par_chunks_mut(GRAIN_CHUNK))
                 .zip(self.disp.par_chunks_mut(GRAIN_CHUNK))
+                .zip(self.w.par_chunks_mut(GRAIN_CHUNK))
                 .enumerate()
-                .map(|(c, ((s, u), disp))| {
+                .map(|(c, (((s, u), disp), w))| {
                     let base = c * GRAIN_CHUNK;
                     let mut m: f64 = 0.0;
                     for k in 0..s.len() {
@@ -194,24 +190,14 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                         wrap::<D>(&mut s[k]);
                         disp[k] += step;
                         m = m.max(disp[k].norm_squared());
+                        if L::MOMENTS {
+                            w[k] += torque[i] * (inv_i[i] * h);
+                        }
                     }
                     m
                 })
                 .collect::<Vec<f64>>()
         };
-        if moments {
-            let torque = &self.torque;
-            let inv_i = &self.inv_inertia;
-            self.w
-                .par_chunks_mut(GRAIN_CHUNK)
-                .enumerate()
-                .for_each(|(c, w)| {
-                    let base = c * GRAIN_CHUNK;
-                    for k in 0..w.len() {
-                        w[k] += torque[base + k] * (inv_i[base + k] * h);
-                    }
-                });
-        }
         self.max_disp = maxd.into_iter().fold(0.0, f64::max).sqrt();
         // Cell: half kick was done at the end of the previous step; drift.
         self.cell.drift(dt);
@@ -279,6 +265,8 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         };
         let mi = self.mass[i];
         let mj = self.mass[j];
+        // One division for both reduced quantities.
+        let inv = 1.0 / ((ri + rj) * (mi + mj));
         Some((
             Pair {
                 n,
@@ -286,8 +274,8 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                 v_contact: v,
                 w_i,
                 w_j,
-                r_eff: ri * rj / (ri + rj),
-                m_eff: mi * mj / (mi + mj),
+                r_eff: ri * rj * (mi + mj) * inv,
+                m_eff: mi * mj * (ri + rj) * inv,
             },
             r,
             ri.min(rj),
@@ -374,11 +362,9 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                             job.g[k] = pf.rolling;
                         }
                         add_outer::<D>(&mut sum.virial, &f, &r);
-                        if pair.gap < 0.0 || pair.gap.is_nan() {
-                            let ov = -pair.gap / rmin;
-                            if ov > sum.overlap.0 || ov.is_nan() {
-                                sum.overlap = (ov, i as u32, j as u32);
-                            }
+                        // Overlap relative to the smaller radius; divide only for a new maximum.
+                        if -pair.gap > sum.overlap.0 * rmin || pair.gap.is_nan() {
+                            sum.overlap = (-pair.gap / rmin, i as u32, j as u32);
                         }
                     }
                 }
@@ -411,62 +397,54 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         let radius = &self.radius;
         let inv_mass = &self.inv_mass;
         let mass = &self.mass;
+        let inv_i = &self.inv_inertia;
         let kin: Vec<Tensor> = self
             .force
             .par_chunks_mut(GRAIN_CHUNK)
             .zip(self.u.par_chunks_mut(GRAIN_CHUNK))
+            .zip(self.torque.par_chunks_mut(GRAIN_CHUNK))
+            .zip(self.w.par_chunks_mut(GRAIN_CHUNK))
             .enumerate()
-            .map(|(c, (force, u))| {
+            .map(|(c, (((force, u), torque), w))| {
                 let base = c * GRAIN_CHUNK;
                 let mut kv = [[0.0; 3]; 3];
                 for k in 0..force.len() {
                     let i = base + k;
+                    let ri = radius[i];
                     let mut f = D::V::zero();
+                    let mut t = D::Ang::zero();
                     for p in nl.row(i) {
                         f -= pf[p];
+                        if L::MOMENTS {
+                            t -= pc[p] * ri;
+                        }
+                        if L::ROLLING {
+                            t -= pg[p];
+                        }
                     }
                     for q in nl.col_start[i]..nl.col_start[i + 1] {
-                        f += pf[nl.col_pair[q as usize] as usize];
+                        let p = nl.col_pair[q as usize] as usize;
+                        f += pf[p];
+                        if L::MOMENTS {
+                            t -= pc[p] * ri;
+                        }
+                        if L::ROLLING {
+                            t += pg[p];
+                        }
                     }
                     force[k] = f;
                     let v = u[k] + (f * inv_mass[i] + D::mul(erate, u[k])) * h;
                     u[k] = v;
                     let mv = v * mass[i];
                     add_outer::<D>(&mut kv, &mv, &v);
+                    if L::MOMENTS {
+                        torque[k] = t;
+                        w[k] += t * (inv_i[i] * h);
+                    }
                 }
                 kv
             })
             .collect();
-        if L::MOMENTS {
-            let inv_i = &self.inv_inertia;
-            self.torque
-                .par_chunks_mut(GRAIN_CHUNK)
-                .zip(self.w.par_chunks_mut(GRAIN_CHUNK))
-                .enumerate()
-                .for_each(|(c, (torque, w))| {
-                    let base = c * GRAIN_CHUNK;
-                    for k in 0..torque.len() {
-                        let i = base + k;
-                        let ri = radius[i];
-                        let mut t = D::Ang::zero();
-                        for p in nl.row(i) {
-                            t -= pc[p] * ri;
-                            if L::ROLLING {
-                                t -= pg[p];
-                            }
-                        }
-                        for q in nl.col_start[i]..nl.col_start[i + 1] {
-                            let p = nl.col_pair[q as usize] as usize;
-                            t -= pc[p] * ri;
-                            if L::ROLLING {
-                                t += pg[p];
-                            }
-                        }
-                        torque[k] = t;
-                        w[k] += t * (inv_i[i] * h);
-                    }
-                });
-        }
         let mut kv = [[0.0; 3]; 3];
         for t in &kin {
             add_tensor(&mut kv, t);
