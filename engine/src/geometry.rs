@@ -239,7 +239,14 @@ pub fn keep_norm_in_plane<V: Linear>(t: V, n: V) -> V {
     if before == 0.0 {
         return t;
     }
-    let p = t - n * t.dot(&n);
+    let tn = t.dot(&n);
+    let p = t - n * tn;
+    // |p|² = |t|²(1 − x) with x = (t·n)²/|t|², which is of order (rotation per step)², so
+    // 1/√(1−x) = 1 + x/2 + 3x²/8 + O(x³) is exact to rounding for x < 1e-5.
+    let x = tn * tn / before;
+    if x < 1e-5 {
+        return p * (1.0 + x * (0.5 + 0.375 * x));
+    }
     let after = p.norm_squared();
     if after == 0.0 {
         return V::zero();

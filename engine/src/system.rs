@@ -51,6 +51,16 @@ pub struct System<D: Dim, L: ContactLaw<D>> {
     max_disp: f64,
 }
 
+/// One chunk of rows of the force pass, with its slices of the per-pair arrays.
+struct Job<'a, H, V, A> {
+    rows: std::ops::Range<usize>,
+    first: usize,
+    hist: &'a mut [H],
+    f: &'a mut [V],
+    c: &'a mut [A],
+    g: &'a mut [A],
+}
+
 /// Summary of one force pass over a chunk of rows.
 #[derive(Clone, Copy)]
 struct ChunkSum {
@@ -288,14 +298,6 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         let erate = self.cell.strain_rate();
         let range = self.law.range();
         let nchunks = n.div_ceil(ROW_CHUNK);
-        struct Job<'a, H, V, A> {
-            rows: std::ops::Range<usize>,
-            first: usize,
-            hist: &'a mut [H],
-            f: &'a mut [V],
-            c: &'a mut [A],
-            g: &'a mut [A],
-        }
         // Move the per-pair arrays out so the chunks can borrow them while `self` is shared.
         let mut history = std::mem::take(&mut self.nlist.history);
         let mut pair_force = std::mem::take(&mut self.pair_force);
@@ -332,44 +334,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         let this = &*self;
         let sums: Vec<ChunkSum> = jobs
             .into_par_iter()
-            .map(|job| {
-                let mut sum = ChunkSum {
-                    virial: [[0.0; 3]; 3],
-                    overlap: (0.0, 0, 0),
-                };
-                for i in job.rows.clone() {
-                    for p in this.nlist.row(i) {
-                        let j = this.nlist.partner[p] as usize;
-                        let k = p - job.first;
-                        let Some((pair, r, rmin)) = this.pair(i, j, &erate, range) else {
-                            job.hist[k] = Default::default();
-                            job.f[k] = D::V::zero();
-                            if L::MOMENTS {
-                                job.c[k] = D::Ang::zero();
-                            }
-                            if L::ROLLING {
-                                job.g[k] = D::Ang::zero();
-                            }
-                            continue;
-                        };
-                        let pf: PairForce<D> = this.law.interact(&pair, &mut job.hist[k], dt);
-                        let f = pair.n * pf.normal + pf.tangential;
-                        job.f[k] = f;
-                        if L::MOMENTS {
-                            job.c[k] = D::cross(pair.n, pf.tangential);
-                        }
-                        if L::ROLLING {
-                            job.g[k] = pf.rolling;
-                        }
-                        add_outer::<D>(&mut sum.virial, &f, &r);
-                        // Overlap relative to the smaller radius; divide only for a new maximum.
-                        if -pair.gap > sum.overlap.0 * rmin || pair.gap.is_nan() {
-                            sum.overlap = (-pair.gap / rmin, i as u32, j as u32);
-                        }
-                    }
-                }
-                sum
-            })
+            .map(|job| this.force_chunk(job, &erate, range, dt))
             .collect();
         self.nlist.history = history;
         self.pair_force = pair_force;
@@ -385,6 +350,53 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         }
         self.contact_virial = virial;
         self.max_overlap = overlap;
+    }
+
+    /// Force pass over one chunk of rows (a named function, so profiles show it).
+    #[inline(never)]
+    fn force_chunk(
+        &self,
+        job: Job<'_, L::History, D::V, D::Ang>,
+        erate: &D::V,
+        range: f64,
+        dt: f64,
+    ) -> ChunkSum {
+        let mut sum = ChunkSum {
+            virial: [[0.0; 3]; 3],
+            overlap: (0.0, 0, 0),
+        };
+        for i in job.rows.clone() {
+            for p in self.nlist.row(i) {
+                let j = self.nlist.partner[p] as usize;
+                let k = p - job.first;
+                let Some((pair, r, rmin)) = self.pair(i, j, erate, range) else {
+                    job.hist[k] = Default::default();
+                    job.f[k] = D::V::zero();
+                    if L::MOMENTS {
+                        job.c[k] = D::Ang::zero();
+                    }
+                    if L::ROLLING {
+                        job.g[k] = D::Ang::zero();
+                    }
+                    continue;
+                };
+                let pf: PairForce<D> = self.law.interact(&pair, &mut job.hist[k], dt);
+                let f = pair.n * pf.normal + pf.tangential;
+                job.f[k] = f;
+                if L::MOMENTS {
+                    job.c[k] = D::cross(pair.n, pf.tangential);
+                }
+                if L::ROLLING {
+                    job.g[k] = pf.rolling;
+                }
+                add_outer::<D>(&mut sum.virial, &f, &r);
+                // Overlap relative to the smaller radius; divide only for a new maximum.
+                if -pair.gap > sum.overlap.0 * rmin || pair.gap.is_nan() {
+                    sum.overlap = (-pair.gap / rmin, i as u32, j as u32);
+                }
+            }
+        }
+        sum
     }
 
     /// Gathers the pair forces on each grain in a fixed order, then the closing half kick.

@@ -68,10 +68,10 @@ impl Friction for Frictionless {
 fn elastic_update<D: Dim>(st: &mut Spring<D::V>, n: D::V, pivot: f64, slip: D::V, kt: f64) {
     let mut t = keep_norm_in_plane(st.t, n);
     t = D::pivot(t, n, pivot);
-    // AR07 App. A: scaled down, never up, with the stiffness.
-    if kt < st.kt {
-        t = t * (kt / st.kt);
-    }
+    // AR07 App. A: scaled down, never up, with the stiffness. Branch-free: whether K_T
+    // rises or falls flips from step to step and would defeat the branch predictor. A new
+    // spring has kt = 0 and t = 0, where the ratio is +∞ and the factor 1.
+    t = t * (kt / st.kt).min(1.0);
     st.kt = kt;
     st.t = t - slip * kt;
 }
