@@ -11,7 +11,7 @@ use crate::geometry::{Dim, Linear as _, D2, D3};
 use crate::init::{maxwell_velocities, random_gas};
 use crate::scene::{Criteria, ForceScale, Law, Mu, Scene, Step};
 use crate::snapshot::{self, Snapshot};
-use crate::system::System;
+use crate::system::{Checkpoint, System};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -347,7 +347,8 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     sys.init_forces();
     let n = sys.len() as f64;
     let ke0 = sys.kinetic_energy() / n;
-    let mut last_good = sys.clone();
+    let mut last_good = None;
+    sys.save(&mut last_good);
     let mut reports = Vec::new();
     let mut pressure: Option<f64> = None;
     let cohesive = scene.law.cohesion().is_some();
@@ -452,7 +453,7 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
                     ),
                 ));
             }
-            last_good.clone_from(sys);
+            sys.save(&mut last_good);
             if !full_time && checks.equilibrium() {
                 end = StepEnd::Equilibrium;
                 break;
@@ -502,10 +503,11 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     Ok((reports, snap, at_threshold))
 }
 
+/// The error for a blown-up run; `sys` is returned to the last good checkpoint to write it.
 fn unstable<D: Dim, L: ContactLaw<D>>(
     scene: &Scene,
-    sys: &System<D, L>,
-    last_good: &System<D, L>,
+    sys: &mut System<D, L>,
+    last_good: &Option<Checkpoint<D, L>>,
     what: String,
 ) -> RunError {
     let (_, k_max) = time_step::<D, L>(scene, sys);
@@ -513,13 +515,17 @@ fn unstable<D: Dim, L: ContactLaw<D>>(
         "{what}. Likely cause: the time step dt = {:.4e} (numerics.dt_fraction = {} of the contact duration for K_max = {:.4e}) is too large for the contacts, or the contacts are too soft (law.kappa) for the applied pressure. Try a smaller numerics.dt_fraction, or a larger numerics.stiffness_force if forces exceed the expected scale",
         sys.dt, scene.numerics.dt_fraction, k_max
     );
+    let (step, time) = (sys.step, sys.time);
+    if let Some(cp) = last_good {
+        sys.restore(cp);
+    }
     RunError::Unstable {
         scene: scene.name.clone(),
-        step: sys.step,
-        time: sys.time,
+        step,
+        time,
         cause,
         last_good: Box::new(snapshot_of(
-            last_good,
+            sys,
             scene,
             "unstable",
             match sys.cell.control {
