@@ -11,170 +11,19 @@
 //! bytes per particle. Each case runs in a child process of its own so that the high-water
 //! marks do not mix.
 
-use grainbench_engine::contact::hertz_mindlin::HertzMindlin;
-use grainbench_engine::contact::linear::{Adhesion, Linear};
-use grainbench_engine::contact::slider::{Coulomb, RollingSpring};
+use grainbench_engine::contact::slider::Coulomb;
 use grainbench_engine::contact::ContactLaw;
 use grainbench_engine::geometry::{Dim, D2, D3};
-use grainbench_engine::run::{build_system, run_protocol, Progress, RunOptions};
-use grainbench_engine::scene::{Law, Scene};
+use grainbench_engine::scene::Scene;
 use grainbench_engine::system::System;
 use std::mem::size_of;
-use std::path::Path;
 use std::process::Command;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
 
 // ---- Preparation: the same as in benches/step.rs (keep in sync). ----
 
-/// 3D Hertz–Mindlin scene: gas at Φ = 0.36 compressed at P = 1, inertia cap 0.1.
-fn scene_3d(n: usize) -> Scene {
-    let text = format!(
-        r#"
-name = "bench-hm3d"
-dimension = 3
-seed = 7
-[particles]
-count = {n}
-[law]
-kind = "hertz-mindlin"
-kappa = 39000.0
-mu = 0.3
-zeta = 0.98
-[initial]
-packing_fraction = 0.36
-[numerics]
-cell_mass = 0.01
-[[protocol]]
-kind = "compress"
-pressure = 1.0
-inertia_cap = 0.1
-max_time = 5.0
-"#
-    );
-    Scene::from_toml(&text, Path::new("bench-hm3d.toml")).expect("3D bench scene")
-}
-
-/// 2D adhesive disks with rolling resistance (GRC07 T.I parameters), compressed at P* = 1,
-/// inertia cap 0.05.
-fn scene_2d(n: usize) -> Scene {
-    let text = format!(
-        r#"
-name = "bench-adh2d"
-dimension = 2
-seed = 7
-[particles]
-count = {n}
-min_diameter = 0.5
-[law]
-kind = "linear"
-kappa = 1e5
-mu = 0.5
-zeta = 0.8
-cohesion = {{ d0 = 1e-3 }}
-rolling = {{ kr = 1e-4, mu_r = 0.005 }}
-[initial]
-packing_fraction = 0.5
-[numerics]
-cell_mass = 0.01
-[[protocol]]
-kind = "compress"
-pressure = 1.0
-inertia_cap = 0.05
-max_time = 6.0
-criteria = {{ preset = "grc07" }}
-"#
-    );
-    Scene::from_toml(&text, Path::new("bench-adh2d.toml")).expect("2D bench scene")
-}
-
-/// The Hertz–Mindlin law of a scene, with the friction kind `f` (as `run::dispatch_law`).
-fn law_3d<F>(scene: &Scene, f: F) -> HertzMindlin<F> {
-    let Law::HertzMindlin {
-        kappa,
-        zeta,
-        poisson,
-        ..
-    } = scene.law
-    else {
-        unreachable!()
-    };
-    // κ = (Ẽ/P_ref)^(2/3).
-    HertzMindlin::new(kappa.powf(1.5), poisson, zeta, f)
-}
-
-fn law_2d(scene: &Scene) -> Linear<Adhesion, Coulomb, RollingSpring> {
-    let Law::Linear {
-        kappa,
-        mu,
-        zeta,
-        kt_over_kn,
-        cohesion,
-        rolling,
-    } = scene.law
-    else {
-        unreachable!()
-    };
-    let (c, r) = (cohesion.unwrap(), rolling.unwrap());
-    Linear {
-        kn: kappa,
-        kt: kappa * kt_over_kn,
-        zeta,
-        cohesion: Adhesion { f0: 1.0, d0: c.d0 },
-        friction: Coulomb { mu: mu.value() },
-        rolling: RollingSpring {
-            kr: r.kr * kappa,
-            mu_r: r.mu_r,
-        },
-    }
-}
-
-/// Overlapping pairs.
-fn contacts<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> usize {
-    sys.interactions().iter().filter(|c| c.gap < 0.0).count()
-}
-
-fn report<D: Dim, L: ContactLaw<D>>(what: &str, sys: &System<D, L>) {
-    let z = contacts(sys);
-    eprintln!(
-        "{what}: N = {}, Φ = {:.4}, contacts = {z} (z = {:.2}), listed pairs = {}, dt = {:.3e}",
-        sys.len(),
-        sys.packing_fraction(),
-        2.0 * z as f64 / sys.len() as f64,
-        sys.nlist.pairs(),
-        sys.dt
-    );
-}
-
-/// Compresses the gas of `scene` until Φ ≥ `phi_stop` (or the step's max_time). The cell
-/// stays stress-controlled: at a fixed volume the unequilibrated packing, still below its
-/// jamming density, would lose most of its contacts within a few hundred steps.
-fn prepare<D: Dim, L: ContactLaw<D>>(scene: &Scene, law: L, phi_stop: f64) -> System<D, L> {
-    let start = Instant::now();
-    let mut sys = build_system::<D, L>(scene, law).expect("build_system");
-    let stop = AtomicBool::new(false);
-    let mut progress = |p: &Progress| {
-        if p.checks.packing_fraction >= phi_stop {
-            stop.store(true, Ordering::Relaxed);
-        }
-    };
-    let mut opts = RunOptions {
-        progress: Some(&mut progress),
-        stop: Some(&stop),
-    };
-    // On a pool worker, as `run_scene` does.
-    rayon::scope(|_| run_protocol(scene, &mut sys, &mut opts)).expect("preparation run");
-    report(
-        &format!(
-            "prepared {} in {} steps, {:.1} s",
-            scene.name,
-            sys.step,
-            start.elapsed().as_secs_f64()
-        ),
-        &sys,
-    );
-    sys
-}
+#[path = "../benches/common/packings.rs"]
+mod packings;
+use packings::*;
 
 // ---- Memory. ----
 
