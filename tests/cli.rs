@@ -109,6 +109,15 @@ fn bad_scene_names_file_and_field_and_leaves_results_untouched() {
         .code(2)
         .stderr(predicate::str::contains("initial.packing_fraction"));
 
+    let not_snap = scene_file(dir.path(), "x.json", "{\"format\": \"other\"}");
+    grainbench()
+        .arg("analyze")
+        .arg(&not_snap)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("x.json"))
+        .stderr(predicate::str::contains("not a grainbench snapshot"));
+
     grainbench()
         .args(["run", "no-such-scene"])
         .assert()

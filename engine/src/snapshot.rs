@@ -94,11 +94,8 @@ pub struct Contact {
 /// Errors reading or writing snapshots.
 #[derive(Debug, thiserror::Error)]
 pub enum SnapshotError {
-    #[error("snapshot {path}: {source}")]
-    Io {
-        path: String,
-        source: std::io::Error,
-    },
+    #[error("snapshot {path}: {error}")]
+    Io { path: String, error: std::io::Error },
     #[error("snapshot {path}: not a grainbench snapshot: {message}")]
     Parse { path: String, message: String },
     #[error("snapshot {path}: {message}")]
@@ -109,9 +106,9 @@ impl Snapshot {
     /// Reads and checks a snapshot file.
     pub fn read(path: &Path) -> Result<Snapshot, SnapshotError> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| SnapshotError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| SnapshotError::Io {
             path: p.clone(),
-            source,
+            error,
         })?;
         let snap: Snapshot = serde_json::from_str(&text).map_err(|e| SnapshotError::Parse {
             path: p.clone(),
@@ -177,9 +174,9 @@ impl Snapshot {
             path: path.display().to_string(),
             message: e.to_string(),
         })?;
-        write_atomic(path, text.as_bytes()).map_err(|source| SnapshotError::Io {
+        write_atomic(path, text.as_bytes()).map_err(|error| SnapshotError::Io {
             path: path.display().to_string(),
-            source,
+            error,
         })
     }
 
