@@ -45,9 +45,10 @@ impl<D: Dim> Cell<D> {
         D::div(self.ldot, self.l)
     }
 
-    /// Half-kick of the cell rates by AR07 (7): M L̈_α = (Ω/L_α)(σ_αα − Σ_α), then the cap on
-    /// the strain rate. `stress` is the measured stress (AR07 (8)).
-    pub fn kick(&mut self, stress: &Tensor, half_dt: f64) {
+    /// Kick of the cell rates by AR07 (7): M L̈_α = (Ω/L_α)(σ_αα − Σ_α), then the cap on
+    /// the strain rate. `stress` is the measured stress (AR07 (8)). Called once per step with
+    /// the full `dt` (leapfrog: the stored rates are half-step rates).
+    pub fn kick(&mut self, stress: &Tensor, dt: f64) {
         match self.control {
             Control::Fixed => self.ldot = D::V::zero(),
             Control::Stress { target, rate_cap } => {
@@ -55,7 +56,7 @@ impl<D: Dim> Cell<D> {
                 for a in 0..D::D {
                     let acc = omega / (self.mass * self.l[a]) * (stress[a][a] - target[a]);
                     let cap = rate_cap * self.l[a];
-                    self.ldot[a] = (self.ldot[a] + half_dt * acc).clamp(-cap, cap);
+                    self.ldot[a] = (self.ldot[a] + dt * acc).clamp(-cap, cap);
                 }
             }
         }

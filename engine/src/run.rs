@@ -174,32 +174,20 @@ pub fn run_scene(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunErr
 
 fn dispatch_law<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunError> {
     match &scene.law {
-        Law::HertzMindlin {
-            kappa,
-            mu,
-            zeta,
-            poisson,
-        } => {
-            // κ = (Ẽ/P_ref)^(2/3) with P_ref = 1 (AR07 (21)).
-            let e = kappa.powf(1.5);
+        Law::HertzMindlin { mu, .. } => {
+            let law = &scene.law;
             match *mu {
-                Mu::Finite(0.0) => run_law::<D, _>(
-                    scene,
-                    HertzMindlin::new(e, *poisson, *zeta, Frictionless),
-                    opts,
-                ),
-                Mu::Finite(m) => run_law::<D, _>(
-                    scene,
-                    HertzMindlin::new(e, *poisson, *zeta, Coulomb { mu: m }),
-                    opts,
-                ),
-                Mu::Infinite => {
-                    run_law::<D, _>(scene, HertzMindlin::new(e, *poisson, *zeta, NoSlip), opts)
+                Mu::Finite(0.0) => {
+                    run_law::<D, _>(scene, hertz_mindlin_law(law, Frictionless), opts)
                 }
+                Mu::Finite(m) => {
+                    run_law::<D, _>(scene, hertz_mindlin_law(law, Coulomb { mu: m }), opts)
+                }
+                Mu::Infinite => run_law::<D, _>(scene, hertz_mindlin_law(law, NoSlip), opts),
             }
         }
         Law::Linear { cohesion, .. } => match cohesion {
-            Some(c) => linear_friction::<D, _>(scene, Adhesion { f0: 1.0, d0: c.d0 }, opts),
+            Some(c) => linear_friction::<D, _>(scene, adhesion(c), opts),
             None => linear_friction::<D, _>(scene, NoCohesion, opts),
         },
     }
@@ -226,44 +214,67 @@ fn linear_rolling<D: Dim, C: Cohesion, F: Friction>(
     f: F,
     opts: &mut RunOptions,
 ) -> Result<Outcome, RunError> {
+    let law = &scene.law;
+    match rolling_spring(law) {
+        Some(r) => run_law::<D, _>(scene, linear_law(law, c, f, r), opts),
+        None => run_law::<D, _>(scene, linear_law(law, c, f, NoRolling), opts),
+    }
+}
+
+/// The Hertz–Mindlin law of a scene in reduced units: κ = (Ẽ/P_ref)^(2/3) with P_ref = 1
+/// (AR07 (21)), so Ẽ = κ^(3/2). Panics if `law` is not Hertz–Mindlin.
+pub fn hertz_mindlin_law<F>(law: &Law, friction: F) -> HertzMindlin<F> {
+    let Law::HertzMindlin {
+        kappa,
+        zeta,
+        poisson,
+        ..
+    } = law
+    else {
+        panic!("hertz_mindlin_law needs a Hertz–Mindlin law")
+    };
+    HertzMindlin::new(kappa.powf(1.5), *poisson, *zeta, friction)
+}
+
+/// The linear law of a scene in reduced units (K_N = κ, K_T = κ·kt_over_kn) with the given
+/// cohesion, friction and rolling parts. Panics if `law` is not linear.
+pub fn linear_law<C, F, R>(law: &Law, cohesion: C, friction: F, rolling: R) -> Linear<C, F, R> {
     let Law::Linear {
         kappa,
         zeta,
         kt_over_kn,
-        rolling,
         ..
-    } = &scene.law
+    } = law
     else {
-        unreachable!()
+        panic!("linear_law needs a linear law")
     };
-    let (kn, kt, zeta) = (*kappa, kappa * kt_over_kn, *zeta);
-    match rolling {
-        Some(r) => {
-            let rolling = RollingSpring {
-                kr: r.kr * kappa,
-                mu_r: r.mu_r,
-            };
-            let law = Linear {
-                kn,
-                kt,
-                zeta,
-                cohesion: c,
-                friction: f,
-                rolling,
-            };
-            run_law::<D, _>(scene, law, opts)
-        }
-        None => {
-            let law = Linear {
-                kn,
-                kt,
-                zeta,
-                cohesion: c,
-                friction: f,
-                rolling: NoRolling,
-            };
-            run_law::<D, _>(scene, law, opts)
-        }
+    Linear {
+        kn: *kappa,
+        kt: kappa * kt_over_kn,
+        zeta: *zeta,
+        cohesion,
+        friction,
+        rolling,
+    }
+}
+
+/// GRC07 adhesion in reduced units: F0 is the force unit.
+pub fn adhesion(c: &crate::scene::Cohesion) -> Adhesion {
+    Adhesion { f0: 1.0, d0: c.d0 }
+}
+
+/// The rolling spring of a linear law, K_r = kr·K_N a² (GRC07 T.I), if it has one.
+pub fn rolling_spring(law: &Law) -> Option<RollingSpring> {
+    match law {
+        Law::Linear {
+            kappa,
+            rolling: Some(r),
+            ..
+        } => Some(RollingSpring {
+            kr: r.kr * kappa,
+            mu_r: r.mu_r,
+        }),
+        _ => None,
     }
 }
 
@@ -467,19 +478,12 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
                 break;
             }
         }
-        if full_time && checks.equilibrium() && end == StepEnd::TimeLimit {
-            // A full-time run that also meets the criteria counts as equilibrated.
-            reports.push(StepReport {
-                index: k,
-                kind,
-                end: StepEnd::Equilibrium,
-                time: sys.time - t0,
-                steps: sys.step - steps0,
-                wall_seconds: step_start.elapsed().as_secs_f64(),
-                checks,
-            });
-            continue;
-        }
+        // A full-time run that also meets the criteria at its end counts as equilibrated.
+        let end = if full_time && end == StepEnd::TimeLimit && checks.equilibrium() {
+            StepEnd::Equilibrium
+        } else {
+            end
+        };
         reports.push(StepReport {
             index: k,
             kind,

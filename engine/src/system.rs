@@ -209,7 +209,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                 .collect::<Vec<f64>>()
         };
         self.max_disp = maxd.into_iter().fold(0.0, f64::max).sqrt();
-        // Cell: half kick was done at the end of the previous step; drift.
+        // Cell: its rates were kicked at the end of the previous step (leapfrog); drift.
         self.cell.drift(dt);
         if self
             .nlist

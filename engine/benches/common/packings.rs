@@ -6,7 +6,10 @@ use grainbench_engine::contact::linear::{Adhesion, Linear};
 use grainbench_engine::contact::slider::{Coulomb, RollingSpring};
 use grainbench_engine::contact::ContactLaw;
 use grainbench_engine::geometry::Dim;
-use grainbench_engine::run::{build_system, run_protocol, Progress, RunOptions};
+use grainbench_engine::run::{
+    adhesion, build_system, hertz_mindlin_law, linear_law, rolling_spring, run_protocol, Progress,
+    RunOptions,
+};
 use grainbench_engine::scene::{Law, Scene};
 use grainbench_engine::system::System;
 use std::path::Path;
@@ -76,43 +79,18 @@ criteria = {{ preset = "grc07" }}
 
 /// The Hertz–Mindlin law of a scene, with the friction kind `f` (as `run::dispatch_law`).
 pub fn law_3d<F>(scene: &Scene, f: F) -> HertzMindlin<F> {
-    let Law::HertzMindlin {
-        kappa,
-        zeta,
-        poisson,
-        ..
-    } = scene.law
-    else {
-        unreachable!()
-    };
-    // κ = (Ẽ/P_ref)^(2/3).
-    HertzMindlin::new(kappa.powf(1.5), poisson, zeta, f)
+    hertz_mindlin_law(&scene.law, f)
 }
 
 pub fn law_2d(scene: &Scene) -> Linear<Adhesion, Coulomb, RollingSpring> {
-    let Law::Linear {
-        kappa,
-        mu,
-        zeta,
-        kt_over_kn,
-        cohesion,
-        rolling,
-    } = scene.law
-    else {
-        unreachable!()
+    let law = &scene.law;
+    let mu = match law {
+        Law::Linear { mu, .. } => mu.value(),
+        _ => unreachable!(),
     };
-    let (c, r) = (cohesion.unwrap(), rolling.unwrap());
-    Linear {
-        kn: kappa,
-        kt: kappa * kt_over_kn,
-        zeta,
-        cohesion: Adhesion { f0: 1.0, d0: c.d0 },
-        friction: Coulomb { mu: mu.value() },
-        rolling: RollingSpring {
-            kr: r.kr * kappa,
-            mu_r: r.mu_r,
-        },
-    }
+    let cohesion = adhesion(&law.cohesion().expect("cohesive bench scene"));
+    let rolling = rolling_spring(law).expect("bench scene with rolling resistance");
+    linear_law(law, cohesion, Coulomb { mu }, rolling)
 }
 
 /// Overlapping pairs.
