@@ -2,7 +2,8 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
-use grainbench_engine::run::{Progress, RunError, RunOptions};
+use grainbench_engine::checkpoint::Checkpoint;
+use grainbench_engine::run::{CheckpointSpec, Outcome, Progress, RunError, RunOptions};
 use grainbench_engine::{library, snapshot, Scene, Snapshot};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -38,6 +39,14 @@ enum Command {
         /// Exit with status 3 unless every protocol step ends at equilibrium.
         #[arg(long)]
         require_equilibrium: bool,
+        /// Continue the interrupted run whose checkpoint is in the output directory; the
+        /// result is bit-identical to an uninterrupted run.
+        #[arg(long)]
+        resume: bool,
+        /// Seconds of wall time between checkpoints (`<out>/checkpoint.bin`); 0 = at every
+        /// check. The checkpoint is removed when the run completes.
+        #[arg(long, default_value_t = 60.0, value_name = "SECS")]
+        checkpoint_every: f64,
     },
     /// Packing metrics of a snapshot: Φ, z, z*, x0, force moments, AR07 (22) / GRC07 (18) checks.
     Analyze {
@@ -69,6 +78,8 @@ fn dispatch(cli: Cli) -> Result<i32> {
         threads: None,
         quiet: false,
         require_equilibrium: false,
+        resume: false,
+        checkpoint_every: 60.0,
     }) {
         Command::Run {
             scene,
@@ -76,13 +87,25 @@ fn dispatch(cli: Cli) -> Result<i32> {
             threads,
             quiet,
             require_equilibrium,
-        } => run(
-            scene.as_deref().unwrap_or("default"),
-            out,
-            threads,
-            quiet,
-            require_equilibrium,
-        ),
+            resume,
+            checkpoint_every,
+        } => {
+            set_threads(threads)?;
+            let flags = RunFlags {
+                quiet,
+                resume,
+                checkpoint_every,
+            };
+            let (scene, out) = scene_and_out(scene.as_deref(), out, resume)?;
+            let (code, outcome) = run(&scene, &out, &flags)?;
+            if let Some(o) = outcome {
+                if code == 0 && require_equilibrium && !o.equilibrated() {
+                    eprintln!("not every step reached equilibrium (--require-equilibrium)");
+                    return Ok(3);
+                }
+            }
+            Ok(code)
+        }
         Command::Analyze { snapshot, json } => analyze(&snapshot, json),
         Command::Scenes => {
             for (name, text) in library::SCENES {
@@ -116,22 +139,68 @@ fn load_scene(spec: &str) -> Result<Scene> {
     )
 }
 
-fn run(
-    spec: &str,
-    out: Option<PathBuf>,
-    threads: Option<usize>,
+/// Options of one run.
+struct RunFlags {
     quiet: bool,
-    require_equilibrium: bool,
-) -> Result<i32> {
-    let scene = load_scene(spec)?;
+    resume: bool,
+    checkpoint_every: f64,
+}
+
+fn set_threads(threads: Option<usize>) -> Result<()> {
     if let Some(t) = threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
             .context("setting the thread count")?;
     }
-    let out = out.unwrap_or_else(|| Path::new("runs").join(&scene.name));
-    std::fs::create_dir_all(&out)
+    Ok(())
+}
+
+const CHECKPOINT: &str = "checkpoint.bin";
+
+/// The scene and output directory of `run`: with `--resume` the scene may come from the
+/// checkpoint of the output directory.
+fn scene_and_out(spec: Option<&str>, out: Option<PathBuf>, resume: bool) -> Result<(Scene, PathBuf)> {
+    match (spec, &out, resume) {
+        (None, Some(dir), true) => {
+            let cp = Checkpoint::read(&dir.join(CHECKPOINT)).map_err(anyhow::Error::msg)?;
+            let scene = cp.scene().map_err(anyhow::Error::msg)?;
+            Ok((scene, dir.clone()))
+        }
+        _ => {
+            let scene = load_scene(spec.unwrap_or("default"))?;
+            let out = out.unwrap_or_else(|| Path::new("runs").join(&scene.name));
+            Ok((scene, out))
+        }
+    }
+}
+
+/// Runs one scene into `out` (writing the snapshot, summary and checkpoints); returns the
+/// exit status and the outcome when the run ended normally or was interrupted.
+fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outcome>)> {
+    let quiet = flags.quiet;
+    let scene = scene.clone();
+    let cp_path = out.join(CHECKPOINT);
+    let resume = if flags.resume {
+        let cp = Checkpoint::read(&cp_path).map_err(|e| {
+            anyhow::anyhow!("{e}\n(--resume continues a run from {}; there is nothing to resume without it: run without --resume)", cp_path.display())
+        })?;
+        let saved = cp.scene().map_err(anyhow::Error::msg)?;
+        if saved != scene {
+            bail!(
+                "the checkpoint {} belongs to scene {:?} with other settings than the scene given; resume with the same scene, or omit the scene and give only --out",
+                cp_path.display(),
+                saved.name
+            );
+        }
+        Some(cp)
+    } else {
+        None
+    };
+    if !(flags.checkpoint_every.is_finite() && flags.checkpoint_every >= 0.0) {
+        bail!("--checkpoint-every must be a number of seconds ≥ 0");
+    }
+    std::fs::create_dir_all(out)
         .with_context(|| format!("creating the output directory {}", out.display()))?;
     let stop = Arc::new(AtomicBool::new(false));
     {
@@ -202,11 +271,24 @@ fn run(
             c.interactions
         ));
     };
+    if let Some(cp) = &resume {
+        eprintln!(
+            "resuming from {} (stage {} of {})",
+            cp_path.display(),
+            cp.header.stage + 1,
+            scene.stages().len()
+        );
+    }
     let result = grainbench_engine::run_scene(
         &scene,
         &mut RunOptions {
             progress: Some(&mut on_progress),
             stop: Some(&stop),
+            checkpoint: Some(CheckpointSpec {
+                path: cp_path.clone(),
+                every: flags.checkpoint_every,
+            }),
+            resume,
         },
     );
     bar.finish_and_clear();
@@ -223,7 +305,7 @@ fn run(
                 "the last state that passed the checks is in {}",
                 path.display()
             );
-            return Ok(4);
+            return Ok((4, None));
         }
         Err(e) => return Err(e.into()),
     };
@@ -285,16 +367,13 @@ fn run(
     println!("wall time  {:.1} s", outcome.wall_seconds);
     if outcome.snapshot.status == "interrupted" {
         eprintln!(
-            "interrupted: the state at the stop is in {}",
-            snap_path.display()
+            "interrupted: the state at the stop is in {}; continue with `grainbench run --resume --out {}`",
+            snap_path.display(),
+            out.display()
         );
-        return Ok(130);
+        return Ok((130, Some(outcome)));
     }
-    if require_equilibrium && !outcome.equilibrated() {
-        eprintln!("not every step reached equilibrium (--require-equilibrium)");
-        return Ok(3);
-    }
-    Ok(0)
+    Ok((0, Some(outcome)))
 }
 
 fn analysis_of(snap: &Snapshot) -> grainbench_comparisons::metrics::Analysis {

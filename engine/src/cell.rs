@@ -3,7 +3,8 @@
 use crate::geometry::{Dim, Linear, Tensor};
 
 /// How the cell lengths evolve.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(bound = "")]
 pub enum Control<D: Dim> {
     /// Fixed volume and shape.
     Fixed,
@@ -12,7 +13,8 @@ pub enum Control<D: Dim> {
 }
 
 /// The periodic cell `[0, L_1) × … × [0, L_d)`; positions are stored reduced, r = L·s.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(bound = "")]
 pub struct Cell<D: Dim> {
     /// Lengths L_α.
     pub l: D::V,

@@ -20,6 +20,8 @@ pub trait Linear:
     + Mul<f64, Output = Self>
     + AddAssign
     + SubAssign
+    + serde::Serialize
+    + serde::de::DeserializeOwned
     + 'static
 {
     fn zero() -> Self;

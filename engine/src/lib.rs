@@ -9,11 +9,13 @@
 //! scenes).
 
 pub mod cell;
+pub mod checkpoint;
 pub mod contact;
 pub mod geometry;
 pub mod init;
 pub mod library;
 pub mod neighbor;
+pub mod protocols;
 pub mod run;
 pub mod scene;
 pub mod snapshot;

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 pub const ROW_CHUNK: usize = 256;
 
 /// Verlet half list with history.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct NeighborList<H> {
     /// Row i holds partners `partner[row_start[i]..row_start[i+1]]`, all > i, ascending.
     pub row_start: Vec<u32>,

@@ -9,9 +9,12 @@ use crate::contact::slider::{Coulomb, Friction, Frictionless, NoRolling, NoSlip,
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, Linear as _, D2, D3};
 use crate::init::{maxwell_velocities, random_gas};
-use crate::scene::{Criteria, ForceScale, Law, Mu, Scene, Step};
+use crate::checkpoint::{self, Checkpoint, Header};
+use crate::protocols::event_driven::HardSpheres;
+use crate::protocols::lattice;
+use crate::scene::{Arrangement, Criteria, ForceScale, Law, Mu, Scene, Step};
 use crate::snapshot::{self, Snapshot};
-use crate::system::{Checkpoint, System};
+use crate::system::{self as system, State, System};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -30,7 +33,7 @@ pub struct Progress {
 }
 
 /// Equilibrium measures at one check, in units of the criteria.
-#[derive(Clone, Debug, Default, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Checks {
     pub packing_fraction: f64,
     /// Mean contact pressure trace(σ_contact)/d.
@@ -51,6 +54,8 @@ pub struct Checks {
     pub free_spin_per_grain: f64,
     /// Interacting pairs.
     pub interactions: usize,
+    /// Clusters of interacting grains (`aggregate` stages only, else 0).
+    pub clusters: usize,
 }
 
 impl Checks {
@@ -64,10 +69,15 @@ impl Checks {
 }
 
 /// How a protocol step ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum StepEnd {
+    /// The equilibrium criteria hold.
     Equilibrium,
+    /// `aggregate`: all grains form one cluster.
+    OneCluster,
+    /// A hard-grain stage (expansion, mixing, growth) completed.
+    Done,
     TimeLimit,
     Interrupted,
 }
@@ -76,17 +86,27 @@ impl StepEnd {
     pub fn as_str(self) -> &'static str {
         match self {
             StepEnd::Equilibrium => "equilibrium",
+            StepEnd::OneCluster => "one-cluster",
+            StepEnd::Done => "done",
             StepEnd::TimeLimit => "time-limit",
             StepEnd::Interrupted => "interrupted",
         }
     }
+    /// Did the stage reach what it was run for?
+    pub fn ok(self) -> bool {
+        matches!(
+            self,
+            StepEnd::Equilibrium | StepEnd::OneCluster | StepEnd::Done
+        )
+    }
 }
 
-/// Report of one protocol step.
-#[derive(Clone, Debug, serde::Serialize)]
+/// Report of one protocol stage.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct StepReport {
+    /// Stage index in [`Scene::stages`].
     pub index: usize,
-    pub kind: &'static str,
+    pub kind: String,
     pub end: StepEnd,
     pub time: f64,
     pub steps: u64,
@@ -113,7 +133,7 @@ pub struct Outcome {
 impl Outcome {
     /// Did every step end at equilibrium?
     pub fn equilibrated(&self) -> bool {
-        self.steps.iter().all(|s| s.end == StepEnd::Equilibrium)
+        self.steps.iter().all(|s| s.end.ok())
     }
 }
 
@@ -152,6 +172,15 @@ impl std::fmt::Display for RunError {
 
 impl std::error::Error for RunError {}
 
+/// Periodic checkpoints on disk.
+#[derive(Clone, Debug)]
+pub struct CheckpointSpec {
+    pub path: std::path::PathBuf,
+    /// Wall-clock seconds between checkpoints (one is also written at each stage start that
+    /// runs hard-sphere dynamics, and when the run is stopped).
+    pub every: f64,
+}
+
 /// Options of a run.
 #[derive(Default)]
 pub struct RunOptions<'a> {
@@ -159,65 +188,382 @@ pub struct RunOptions<'a> {
     pub progress: Option<&'a mut (dyn FnMut(&Progress) + Send)>,
     /// Set to stop the run cleanly at the next check (Ctrl-C).
     pub stop: Option<&'a AtomicBool>,
+    /// Write checkpoints.
+    pub checkpoint: Option<CheckpointSpec>,
+    /// Continue from a checkpoint of the same scene.
+    pub resume: Option<Checkpoint>,
 }
 
-/// Runs a validated scene to the end of its protocol.
+/// Grains between protocol stages, independent of the contact law: what hard-sphere stages
+/// read and write, and what a new contact law starts from.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(bound = "")]
+pub struct Grains<D: Dim> {
+    pub l: D::V,
+    pub s: Vec<D::V>,
+    pub u: Vec<D::V>,
+    pub diameter: Vec<f64>,
+    pub time: f64,
+    pub step: u64,
+}
+
+/// Checkpoint payload: grains at a stage start, or the integrator inside a stage.
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(bound(
+    serialize = "H: serde::Serialize",
+    deserialize = "H: serde::de::DeserializeOwned"
+))]
+enum Payload<D: Dim, H> {
+    AtStart(Grains<D>),
+    Inside(State<D, H>),
+}
+
+/// Bookkeeping carried through the stages.
+struct Ctx<'s, D: Dim> {
+    scene: &'s Scene,
+    stages: Vec<(usize, Step)>,
+    start: Instant,
+    wall_before: f64,
+    reports: Vec<StepReport>,
+    pressure: Option<f64>,
+    grains: Grains<D>,
+    neighbor_builds: u64,
+    last_checkpoint: Instant,
+    dt: f64,
+    k_max: f64,
+    law: String,
+    at_threshold: usize,
+}
+
+impl<D: Dim> Ctx<'_, D> {
+    fn header(&self, stage: usize, inside: bool, t0: f64, steps0: u64, stage_wall: f64) -> Header {
+        Header {
+            format: checkpoint::FORMAT.into(),
+            version: checkpoint::VERSION,
+            code: checkpoint::code(),
+            scene_json: serde_json::to_string(self.scene).expect("scene encodes"),
+            stage,
+            inside,
+            stage_time0: t0,
+            stage_steps0: steps0,
+            stage_wall,
+            wall_seconds: self.wall_before + self.start.elapsed().as_secs_f64(),
+            reports: self.reports.clone(),
+            pressure: self.pressure,
+            neighbor_builds: self.neighbor_builds,
+        }
+    }
+
+    fn setup_error(&self, message: String) -> RunError {
+        RunError::Setup {
+            scene: self.scene.name.clone(),
+            message,
+        }
+    }
+}
+
+/// Runs a validated scene to the end of its protocol (or from a checkpoint to the end).
 ///
 /// The run executes on a worker of rayon's global pool, so the parallel loops of each step
 /// fork from a worker (cheap) instead of being injected from outside at every step.
 pub fn run_scene(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunError> {
     rayon::scope(|_| match scene.dimension {
-        2 => dispatch_law::<D2>(scene, opts),
-        _ => dispatch_law::<D3>(scene, opts),
+        2 => run_dim::<D2>(scene, opts),
+        _ => run_dim::<D3>(scene, opts),
     })
 }
 
-fn dispatch_law<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunError> {
-    match &scene.law {
-        Law::HertzMindlin { mu, .. } => {
-            let law = &scene.law;
-            match *mu {
-                Mu::Finite(0.0) => {
-                    run_law::<D, _>(scene, hertz_mindlin_law(law, Frictionless), opts)
+/// The initial grains of a scene: random gas (GRC07 §III.A) or FCC lattice (AR07 §III).
+pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
+    let n = scene.particles.count;
+    let (l, s, diameter) = match scene.initial.arrangement {
+        Arrangement::Random => {
+            let gas = random_gas::<D>(
+                n,
+                scene.particles.min_diameter,
+                scene.initial.packing_fraction,
+                scene.seed,
+            )?;
+            (gas.l, gas.s, gas.diameter)
+        }
+        Arrangement::Fcc => {
+            let k = lattice::fcc_cells_for(n).ok_or("FCC needs 4k³ grains")?;
+            let (side, pos) = lattice::fcc(k, scene.initial.packing_fraction);
+            let mut l = D::V::zero();
+            for a in 0..D::D {
+                l[a] = side;
+            }
+            let s = pos.iter().map(|p| D::from_slice(p.as_slice())).collect();
+            (l, s, vec![1.0; n])
+        }
+    };
+    let mass: Vec<f64> = diameter.iter().map(|d| d.powi(D::D as i32)).collect();
+    let u = if scene.initial.rms_velocity > 0.0 {
+        maxwell_velocities::<D>(&mass, scene.initial.rms_velocity, scene.seed)
+    } else {
+        vec![D::V::zero(); n]
+    };
+    Ok(Grains {
+        l,
+        s,
+        u,
+        diameter,
+        time: 0.0,
+        step: 0,
+    })
+}
+
+fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunError> {
+    let start = Instant::now();
+    let stages = scene.stages();
+    let resume = opts.resume.take();
+    let mut ctx = Ctx::<D> {
+        scene,
+        stages,
+        start,
+        wall_before: 0.0,
+        reports: Vec::new(),
+        pressure: None,
+        grains: Grains {
+            l: D::V::zero(),
+            s: Vec::new(),
+            u: Vec::new(),
+            diameter: Vec::new(),
+            time: 0.0,
+            step: 0,
+        },
+        neighbor_builds: 0,
+        last_checkpoint: Instant::now(),
+        dt: 0.0,
+        k_max: 0.0,
+        law: String::new(),
+        at_threshold: 0,
+    };
+    let mut k = 0;
+    let mut inside: Option<(Header, Vec<u8>)> = None;
+    match resume {
+        Some(cp) => {
+            let h = &cp.header;
+            k = h.stage;
+            ctx.wall_before = h.wall_seconds;
+            ctx.reports = h.reports.clone();
+            ctx.pressure = h.pressure;
+            ctx.neighbor_builds = h.neighbor_builds;
+            if h.inside {
+                inside = Some((cp.header, cp.payload));
+            } else {
+                match checkpoint::decode::<Payload<D, ()>>(&cp.payload)
+                    .map_err(|e| ctx.setup_error(e))?
+                {
+                    Payload::AtStart(g) => ctx.grains = g,
+                    Payload::Inside(_) => {
+                        return Err(ctx.setup_error("checkpoint payload does not match its header".into()))
+                    }
                 }
-                Mu::Finite(m) => {
-                    run_law::<D, _>(scene, hertz_mindlin_law(law, Coulomb { mu: m }), opts)
-                }
-                Mu::Infinite => run_law::<D, _>(scene, hertz_mindlin_law(law, NoSlip), opts),
             }
         }
+        None => ctx.grains = initial_grains::<D>(scene).map_err(|e| ctx.setup_error(e))?,
+    }
+    let mut snapshot = None;
+    let mut interrupted = false;
+    while k < ctx.stages.len() {
+        let step = ctx.stages[k].1.clone();
+        if !step.is_dem() {
+            if let Some(spec) = &opts.checkpoint {
+                let h = ctx.header(k, false, ctx.grains.time, ctx.grains.step, 0.0);
+                let payload = checkpoint::encode(&Payload::<D, ()>::AtStart(ctx.grains.clone()));
+                write_checkpoint(&ctx, spec, &h, &payload)?;
+            }
+            hard_stage(&mut ctx, k, &step)?;
+            snapshot = None;
+            k += 1;
+            continue;
+        }
+        let mu = scene.mu_of(&step);
+        let mut end = k + 1;
+        while end < ctx.stages.len()
+            && ctx.stages[end].1.is_dem()
+            && scene.mu_of(&ctx.stages[end].1) == mu
+        {
+            end += 1;
+        }
+        let (snap, stopped) = dispatch_law::<D>(&mut ctx, mu, k..end, inside.take(), opts)?;
+        snapshot = Some(snap);
+        if stopped {
+            interrupted = true;
+            break;
+        }
+        k = end;
+    }
+    let snapshot = match snapshot {
+        Some(s) => s,
+        // The protocol ended with hard-grain stages: a snapshot without contacts.
+        None => {
+            let mu = scene.mu_of(&Step::Expand { factor: 1.0 });
+            let n = ctx.stages.len();
+            dispatch_law::<D>(&mut ctx, mu, n..n, None, opts)?.0
+        }
+    };
+    if !interrupted {
+        if let Some(spec) = &opts.checkpoint {
+            // The run is complete: its checkpoint would only resume into a finished run.
+            let _ = std::fs::remove_file(&spec.path);
+        }
+    }
+    Ok(Outcome {
+        snapshot,
+        steps: ctx.reports,
+        dt: ctx.dt,
+        k_max: ctx.k_max,
+        law: ctx.law,
+        wall_seconds: ctx.wall_before + start.elapsed().as_secs_f64(),
+        neighbor_builds: ctx.neighbor_builds,
+        contacts_at_threshold: ctx.at_threshold,
+    })
+}
+
+fn write_checkpoint<D: Dim>(
+    ctx: &Ctx<D>,
+    spec: &CheckpointSpec,
+    header: &Header,
+    payload: &[u8],
+) -> Result<(), RunError> {
+    Checkpoint::write(&spec.path, header, payload).map_err(|e| {
+        ctx.setup_error(format!(
+            "cannot write the checkpoint {}: {e}",
+            spec.path.display()
+        ))
+    })
+}
+
+/// A deterministic seed for stage `k` of a scene.
+fn stage_seed(seed: u64, k: usize) -> u64 {
+    seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(k as u64 + 1))
+}
+
+/// Hard-grain stages: expansion, event-driven mixing, Lubachevsky–Stillinger growth.
+fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize, step: &Step) -> Result<(), RunError> {
+    let t = Instant::now();
+    let scene_name = ctx.scene.name.clone();
+    let setup = |message: String| RunError::Setup {
+        scene: scene_name.clone(),
+        message,
+    };
+    let g = &mut ctx.grains;
+    let n = g.s.len();
+    let mass: Vec<f64> = g.diameter.iter().map(|d| d.powi(D::D as i32)).collect();
+    let radius: Vec<f64> = g.diameter.iter().map(|d| 0.5 * d).collect();
+    let hard = |g: &Grains<D>| {
+        let vel = maxwell_velocities::<D>(&mass, 1.0, stage_seed(ctx.scene.seed, k));
+        HardSpheres::<D>::new(g.l, g.s.clone(), radius.clone(), mass.clone(), vel).map_err(|e| {
+            format!("{} stage {}: {e}. Grains must not overlap before hard-sphere dynamics: add an `expand` step first (AR07 §IV.B uses factor = 1.005)", step.kind(), k + 1)
+        })
+    };
+    let (time, collisions) = match step {
+        Step::Expand { factor } => {
+            g.l = g.l * *factor;
+            (0.0, 0)
+        }
+        Step::HardSphereMix {
+            collisions_per_grain,
+        } => {
+            let mut hs = hard(g).map_err(setup)?;
+            let st = hs.run_collisions(*collisions_per_grain);
+            g.s = hs.s;
+            (st.time, st.collisions)
+        }
+        Step::Grow {
+            packing_fraction,
+            rate,
+        } => {
+            let mut hs = hard(g).map_err(setup)?;
+            let st = hs
+                .grow(*packing_fraction, *rate)
+                .map_err(|e| setup(format!("grow stage {}: {e}", k + 1)))?;
+            // Back to the length unit a: the grains keep their diameters, the cell shrinks.
+            let factor = hs.radius[0] / radius[0];
+            g.l = hs.l * (1.0 / factor);
+            g.s = hs.s;
+            (st.time, st.collisions)
+        }
+        _ => unreachable!("DEM stage in hard_stage"),
+    };
+    g.u = vec![D::V::zero(); n];
+    let phi: f64 = g.diameter.iter().map(|d| D::grain_volume(*d)).sum::<f64>() / D::product(g.l);
+    ctx.reports.push(StepReport {
+        index: k,
+        kind: step.kind().into(),
+        end: StepEnd::Done,
+        time,
+        steps: collisions,
+        wall_seconds: t.elapsed().as_secs_f64(),
+        checks: Checks {
+            packing_fraction: phi,
+            pressure_target: f64::NAN,
+            ..Default::default()
+        },
+    });
+    Ok(())
+}
+
+fn dispatch_law<D: Dim>(
+    ctx: &mut Ctx<D>,
+    mu: Mu,
+    range: std::ops::Range<usize>,
+    inside: Option<(Header, Vec<u8>)>,
+    opts: &mut RunOptions,
+) -> Result<(Snapshot, bool), RunError> {
+    let law = &ctx.scene.law.clone();
+    match law {
+        Law::HertzMindlin { .. } => match mu {
+            Mu::Finite(0.0) => {
+                run_law::<D, _>(ctx, hertz_mindlin_law(law, Frictionless), range, inside, opts)
+            }
+            Mu::Finite(m) => run_law::<D, _>(
+                ctx,
+                hertz_mindlin_law(law, Coulomb { mu: m }),
+                range,
+                inside,
+                opts,
+            ),
+            Mu::Infinite => {
+                run_law::<D, _>(ctx, hertz_mindlin_law(law, NoSlip), range, inside, opts)
+            }
+        },
         Law::Linear { cohesion, .. } => match cohesion {
-            Some(c) => linear_friction::<D, _>(scene, adhesion(c), opts),
-            None => linear_friction::<D, _>(scene, NoCohesion, opts),
+            Some(c) => linear_friction::<D, _>(ctx, adhesion(c), mu, range, inside, opts),
+            None => linear_friction::<D, _>(ctx, NoCohesion, mu, range, inside, opts),
         },
     }
 }
 
 fn linear_friction<D: Dim, C: Cohesion>(
-    scene: &Scene,
+    ctx: &mut Ctx<D>,
     c: C,
+    mu: Mu,
+    range: std::ops::Range<usize>,
+    inside: Option<(Header, Vec<u8>)>,
     opts: &mut RunOptions,
-) -> Result<Outcome, RunError> {
-    let Law::Linear { mu, .. } = &scene.law else {
-        unreachable!()
-    };
-    match *mu {
-        Mu::Finite(0.0) => linear_rolling::<D, C, _>(scene, c, Frictionless, opts),
-        Mu::Finite(m) => linear_rolling::<D, C, _>(scene, c, Coulomb { mu: m }, opts),
-        Mu::Infinite => linear_rolling::<D, C, _>(scene, c, NoSlip, opts),
+) -> Result<(Snapshot, bool), RunError> {
+    match mu {
+        Mu::Finite(0.0) => linear_rolling::<D, C, _>(ctx, c, Frictionless, range, inside, opts),
+        Mu::Finite(m) => linear_rolling::<D, C, _>(ctx, c, Coulomb { mu: m }, range, inside, opts),
+        Mu::Infinite => linear_rolling::<D, C, _>(ctx, c, NoSlip, range, inside, opts),
     }
 }
 
 fn linear_rolling<D: Dim, C: Cohesion, F: Friction>(
-    scene: &Scene,
+    ctx: &mut Ctx<D>,
     c: C,
     f: F,
+    range: std::ops::Range<usize>,
+    inside: Option<(Header, Vec<u8>)>,
     opts: &mut RunOptions,
-) -> Result<Outcome, RunError> {
-    let law = &scene.law;
+) -> Result<(Snapshot, bool), RunError> {
+    let law = &ctx.scene.law.clone();
     match rolling_spring(law) {
-        Some(r) => run_law::<D, _>(scene, linear_law(law, c, f, r), opts),
-        None => run_law::<D, _>(scene, linear_law(law, c, f, NoRolling), opts),
+        Some(r) => run_law::<D, _>(ctx, linear_law(law, c, f, r), range, inside, opts),
+        None => run_law::<D, _>(ctx, linear_law(law, c, f, NoRolling), range, inside, opts),
     }
 }
 
@@ -281,32 +627,42 @@ pub fn rolling_spring(law: &Law) -> Option<RollingSpring> {
 /// Largest pressure any step asks for (at least the force unit).
 fn force_scale(scene: &Scene) -> f64 {
     scene
-        .protocol
+        .stages()
         .iter()
-        .filter_map(|s| match s {
+        .filter_map(|(_, s)| match s {
             Step::Compress { pressure, .. } => Some(*pressure),
             _ => None,
         })
         .fold(1.0, f64::max)
 }
 
-/// Builds the system of a scene for a law (initial gas, cell, time step).
+/// The system of a scene's initial grains for a law (as the first stage of a scene that starts
+/// with a DEM stage sees it).
 pub fn build_system<D: Dim, L: ContactLaw<D>>(
     scene: &Scene,
     law: L,
 ) -> Result<System<D, L>, String> {
-    let gas = random_gas::<D>(
-        scene.particles.count,
-        scene.particles.min_diameter,
-        scene.initial.packing_fraction,
-        scene.seed,
-    )?;
-    let total_mass: f64 = gas.diameter.iter().map(|d| d.powi(D::D as i32)).sum();
-    let cell = Cell::new(gas.l, scene.numerics.cell_mass * total_mass);
-    let mut sys = System::new(law, cell, gas.s, &gas.diameter, scene.numerics.skin);
-    if scene.initial.rms_velocity > 0.0 {
-        sys.u = maxwell_velocities::<D>(&sys.mass, scene.initial.rms_velocity, scene.seed);
-    }
+    system_of(scene, law, &initial_grains::<D>(scene)?)
+}
+
+/// A system holding `grains`, with the law, cell mass and time step of the scene.
+pub fn system_of<D: Dim, L: ContactLaw<D>>(
+    scene: &Scene,
+    law: L,
+    grains: &Grains<D>,
+) -> Result<System<D, L>, String> {
+    let total_mass: f64 = grains.diameter.iter().map(|d| d.powi(D::D as i32)).sum();
+    let cell = Cell::new(grains.l, scene.numerics.cell_mass * total_mass);
+    let mut sys = System::new(
+        law,
+        cell,
+        grains.s.clone(),
+        &grains.diameter,
+        scene.numerics.skin,
+    );
+    sys.u.clone_from(&grains.u);
+    sys.time = grains.time;
+    sys.step = grains.step;
     let (dt, _) = time_step::<D, L>(scene, &sys);
     sys.dt = dt;
     sys.check_cell()?;
@@ -326,55 +682,149 @@ pub fn time_step<D: Dim, L: ContactLaw<D>>(scene: &Scene, sys: &System<D, L>) ->
     (scene.numerics.dt_fraction * t_c, k_max)
 }
 
+/// Runs the DEM stages `range` with one typed law, from the grains in `ctx` or from a
+/// checkpoint taken inside the first of them. Returns the snapshot and whether it stopped.
 fn run_law<D: Dim, L: ContactLaw<D>>(
-    scene: &Scene,
+    ctx: &mut Ctx<D>,
     law: L,
+    range: std::ops::Range<usize>,
+    inside: Option<(Header, Vec<u8>)>,
     opts: &mut RunOptions,
-) -> Result<Outcome, RunError> {
-    let start = Instant::now();
-    let mut sys = build_system::<D, L>(scene, law).map_err(|message| RunError::Setup {
-        scene: scene.name.clone(),
-        message,
-    })?;
-    let (_, k_max) = time_step::<D, L>(scene, &sys);
-    run_protocol(scene, &mut sys, opts).map(|(steps, snapshot, at_threshold)| Outcome {
-        snapshot,
-        steps,
-        dt: sys.dt,
-        k_max,
-        law: sys.law.describe(),
-        wall_seconds: start.elapsed().as_secs_f64(),
-        neighbor_builds: sys.nlist.builds,
-        contacts_at_threshold: at_threshold,
-    })
+) -> Result<(Snapshot, bool), RunError> {
+    let scene = ctx.scene;
+    let (mut sys, resume_at) = match inside {
+        Some((h, payload)) => match checkpoint::decode::<Payload<D, L::History>>(&payload)
+            .map_err(|e| ctx.setup_error(e))?
+        {
+            Payload::Inside(st) => (
+                System::from_state(law, st),
+                Some((h.stage_time0, h.stage_steps0, h.stage_wall)),
+            ),
+            Payload::AtStart(_) => {
+                return Err(ctx.setup_error("checkpoint payload does not match its header".into()))
+            }
+        },
+        None => {
+            let mut sys =
+                system_of(scene, law, &ctx.grains).map_err(|e| ctx.setup_error(e))?;
+            sys.init_forces();
+            (sys, None)
+        }
+    };
+    let (dt, k_max) = time_step::<D, L>(scene, &sys);
+    debug_assert!(resume_at.is_some() || sys.dt == dt);
+    ctx.dt = sys.dt;
+    ctx.k_max = k_max;
+    ctx.law = sys.law.describe();
+    let builds0 = sys.nlist.builds;
+    let stopped = run_stages(ctx, &mut sys, range, resume_at, opts)?;
+    ctx.neighbor_builds += sys.nlist.builds - builds0;
+    ctx.at_threshold = contacts_at_threshold(&sys, scene);
+    let status = if stopped {
+        "interrupted"
+    } else if ctx.reports.iter().all(|r| r.end.ok()) {
+        "equilibrium"
+    } else {
+        "time-limit"
+    };
+    let snap = snapshot_of(&sys, scene, status, ctx.pressure);
+    ctx.grains = Grains {
+        l: sys.cell.l,
+        s: sys.s.clone(),
+        u: sys.u.clone(),
+        diameter: sys.radius.iter().map(|r| 2.0 * r).collect(),
+        time: sys.time,
+        step: sys.step,
+    };
+    Ok((snap, stopped))
 }
 
-/// Runs the protocol of `scene` on a prepared system.
+/// Runs every DEM stage of `scene` on a prepared system (all with the system's law): the
+/// benches' preparation route.
 pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     scene: &Scene,
     sys: &mut System<D, L>,
     opts: &mut RunOptions,
 ) -> Result<(Vec<StepReport>, Snapshot, usize), RunError> {
     sys.init_forces();
+    let mut ctx = Ctx::<D> {
+        scene,
+        stages: scene.stages(),
+        start: Instant::now(),
+        wall_before: 0.0,
+        reports: Vec::new(),
+        pressure: None,
+        grains: Grains {
+            l: sys.cell.l,
+            s: Vec::new(),
+            u: Vec::new(),
+            diameter: Vec::new(),
+            time: 0.0,
+            step: 0,
+        },
+        neighbor_builds: 0,
+        last_checkpoint: Instant::now(),
+        dt: sys.dt,
+        k_max: 0.0,
+        law: String::new(),
+        at_threshold: 0,
+    };
+    let n = ctx.stages.len();
+    let stopped = run_stages(&mut ctx, sys, 0..n, None, opts)?;
+    let status = if stopped { "interrupted" } else { "equilibrium" };
+    let snap = snapshot_of(sys, scene, status, ctx.pressure);
+    Ok((ctx.reports, snap, contacts_at_threshold(sys, scene)))
+}
+
+/// Number of clusters of grains linked by interactions (contacts or distant attractions).
+fn clusters<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> usize {
+    let n = sys.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let mut count = n;
+    for c in sys.interactions() {
+        let (a, b) = (root(&mut parent, c.i), root(&mut parent, c.j));
+        if a != b {
+            parent[a] = b;
+            count -= 1;
+        }
+    }
+    count
+}
+
+/// The stages `range` on one system; returns whether the run was stopped.
+fn run_stages<D: Dim, L: ContactLaw<D>>(
+    ctx: &mut Ctx<D>,
+    sys: &mut System<D, L>,
+    range: std::ops::Range<usize>,
+    mut resume_at: Option<(f64, u64, f64)>,
+    opts: &mut RunOptions,
+) -> Result<bool, RunError> {
+    let scene = ctx.scene;
     let n = sys.len() as f64;
     let ke0 = sys.kinetic_energy() / n;
     let mut last_good = None;
     sys.save(&mut last_good);
-    let mut reports = Vec::new();
-    let mut pressure: Option<f64> = None;
     let cohesive = scene.law.cohesion().is_some();
-    let mut status = "equilibrium";
-    for (k, step) in scene.protocol.iter().enumerate() {
-        let step_start = Instant::now();
-        let kind = match step {
+    let stage_count = ctx.stages.len();
+    for k in range {
+        let step = ctx.stages[k].1.clone();
+        let kind = step.kind();
+        match &step {
             Step::Compress {
                 pressure: p,
                 inertia_cap,
                 ..
             } => {
-                pressure = Some(*p);
-                // Strain-rate cap: AR07 (23) I = ε̇√(m/(aP)) (time unit √(m/(aP)) for P > 0 without
-                // cohesion), GRC08 I_a = ε̇ T0 with T0 = √(m a/F0) = 1 with cohesion.
+                ctx.pressure = Some(*p);
+                // Strain-rate cap: AR07 (23) I = ε̇√(m/(aP)) (time unit √(m/(aP)) for P > 0
+                // without cohesion), GRC08 I_a = ε̇ T0 with T0 = √(m a/F0) = 1 with cohesion.
                 let time_unit = if cohesive { 1.0 } else { 1.0 / p.sqrt() };
                 let mut target = D::V::zero();
                 for a in 0..D::D {
@@ -384,18 +834,16 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
                     target,
                     rate_cap: inertia_cap / time_unit,
                 };
-                "compress"
             }
-            Step::FixedVolume { .. } => {
+            _ => {
                 sys.cell.control = Control::Fixed;
                 sys.cell.ldot = D::V::zero();
-                "fixed-volume"
             }
-        };
+        }
         let criteria = step.criteria();
         let f_ref = match criteria.scale {
-            ForceScale::Pressure => pressure.unwrap_or(1.0),
-            ForceScale::Cohesion => pressure.unwrap_or(0.0).max(1.0),
+            ForceScale::Pressure => ctx.pressure.unwrap_or(1.0),
+            ForceScale::Cohesion => ctx.pressure.unwrap_or(0.0).max(1.0),
         };
         let full_time = matches!(
             step,
@@ -404,8 +852,9 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
                 ..
             }
         );
-        let t0 = sys.time;
-        let steps0 = sys.step;
+        let aggregate = matches!(step, Step::Aggregate { .. });
+        let (t0, steps0, wall0) = resume_at.take().unwrap_or((sys.time, sys.step, 0.0));
+        let step_start = Instant::now();
         let max_time = step.max_time();
         let end;
         let mut checks;
@@ -429,11 +878,14 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
                     ));
                 }
             }
-            checks = measure(sys, criteria, f_ref, step);
+            checks = measure(sys, &criteria, f_ref, &step);
+            if aggregate {
+                checks.clusters = clusters(sys);
+            }
             if let Some(cb) = opts.progress.as_mut() {
                 cb(&Progress {
                     step_index: k,
-                    step_count: scene.protocol.len(),
+                    step_count: stage_count,
                     step_kind: kind,
                     time: sys.time - t0,
                     max_time,
@@ -465,7 +917,11 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
                 ));
             }
             sys.save(&mut last_good);
-            if !full_time && checks.equilibrium() {
+            if aggregate && checks.clusters == 1 {
+                end = StepEnd::OneCluster;
+                break;
+            }
+            if !aggregate && !full_time && checks.equilibrium() {
                 end = StepEnd::Equilibrium;
                 break;
             }
@@ -477,6 +933,15 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
                 end = StepEnd::Interrupted;
                 break;
             }
+            if let Some(spec) = &opts.checkpoint {
+                if ctx.last_checkpoint.elapsed().as_secs_f64() >= spec.every {
+                    let wall = wall0 + step_start.elapsed().as_secs_f64();
+                    let h = ctx.header(k, true, t0, steps0, wall);
+                    let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
+                    write_checkpoint(ctx, spec, &h, &payload)?;
+                    ctx.last_checkpoint = Instant::now();
+                }
+            }
         }
         // A full-time run that also meets the criteria at its end counts as equilibrated.
         let end = if full_time && end == StepEnd::TimeLimit && checks.equilibrium() {
@@ -484,34 +949,36 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
         } else {
             end
         };
-        reports.push(StepReport {
+        let wall = wall0 + step_start.elapsed().as_secs_f64();
+        if end == StepEnd::Interrupted {
+            // Resumable from exactly here.
+            if let Some(spec) = &opts.checkpoint {
+                let h = ctx.header(k, true, t0, steps0, wall);
+                let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
+                write_checkpoint(ctx, spec, &h, &payload)?;
+            }
+        }
+        ctx.reports.push(StepReport {
             index: k,
-            kind,
+            kind: kind.into(),
             end,
             time: sys.time - t0,
             steps: sys.step - steps0,
-            wall_seconds: step_start.elapsed().as_secs_f64(),
+            wall_seconds: wall,
             checks,
         });
-        match end {
-            StepEnd::Interrupted => {
-                status = "interrupted";
-                break;
-            }
-            StepEnd::TimeLimit => status = "time-limit",
-            StepEnd::Equilibrium => {}
+        if end == StepEnd::Interrupted {
+            return Ok(true);
         }
     }
-    let at_threshold = contacts_at_threshold(sys, scene);
-    let snap = snapshot_of(sys, scene, status, pressure);
-    Ok((reports, snap, at_threshold))
+    Ok(false)
 }
 
 /// The error for a blown-up run; `sys` is returned to the last good checkpoint to write it.
 fn unstable<D: Dim, L: ContactLaw<D>>(
     scene: &Scene,
     sys: &mut System<D, L>,
-    last_good: &Option<Checkpoint<D, L>>,
+    last_good: &Option<system::Checkpoint<D, L>>,
     what: String,
 ) -> RunError {
     let (_, k_max) = time_step::<D, L>(scene, sys);
@@ -602,6 +1069,7 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(
         kinetic_per_grain: ke,
         free_spin_per_grain: ke_free / n,
         interactions: inter.len(),
+        clusters: 0,
     }
 }
 
@@ -675,7 +1143,7 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
     Snapshot {
         format: snapshot::FORMAT.into(),
         version: snapshot::VERSION,
-        code: format!("grainbench {}", env!("CARGO_PKG_VERSION")),
+        code: checkpoint::code(),
         scene: scene.name.clone(),
         dimension: D::D,
         time: sys.time,

@@ -37,6 +37,15 @@ pub struct Scene {
     pub output: Output,
 }
 
+/// Where the grains start.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Arrangement {
+    #[default]
+    Random,
+    Fcc,
+}
+
 fn default_seed() -> u64 {
     1
 }
@@ -171,11 +180,15 @@ pub struct Rolling {
     pub mu_r: f64,
 }
 
-/// Initial state: a random non-overlapping gas.
+/// Initial state: a random non-overlapping gas, or an FCC lattice (AR07 §III).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Initial {
-    /// Solid fraction Φ_I of the random gas.
+    /// `random` (sequential random placement, GRC07 §III.A) or `fcc` (n = 4k³ spheres on an
+    /// FCC lattice, AR07 §III).
+    #[serde(default)]
+    pub arrangement: Arrangement,
+    /// Solid fraction Φ_I of the initial state.
     pub packing_fraction: f64,
     /// Root-mean-square speed of Maxwell velocities (reduced units); 0 = grains at rest.
     #[serde(default)]
@@ -227,6 +240,11 @@ pub enum Step {
         max_time: f64,
         #[serde(default)]
         criteria: Criteria,
+        /// Friction coefficient for this step instead of `law.mu` (AR07 §IV.B: state C is
+        /// assembled without friction, mixed, then compressed with μ = 0.3). A change of μ
+        /// between consecutive steps starts the new step without contact history.
+        #[serde(default)]
+        mu: Option<Mu>,
     },
     /// Fixed cell.
     FixedVolume {
@@ -236,18 +254,118 @@ pub enum Step {
         /// Run the full time even when the criteria hold.
         #[serde(default)]
         full_time: bool,
+        #[serde(default)]
+        mu: Option<Mu>,
     },
+    /// Fixed cell until all grains form one cluster of interacting grains (GRC07 §III.B,
+    /// method 2: aggregation of a cohesive gas).
+    Aggregate {
+        max_time: f64,
+        #[serde(default)]
+        mu: Option<Mu>,
+    },
+    /// Stepwise pressure program: P = `from`·`factor`^k (or divided, when unloading) up to
+    /// `to`, each level a `compress` step run to its criteria (AR07 T.III QS rows; GRC08
+    /// §II.D.2: factor 10^(1/8) from P* = 0.01 to 13.33 and back).
+    PressureProgram {
+        from: f64,
+        to: f64,
+        factor: f64,
+        inertia_cap: f64,
+        /// Time limit of each level.
+        max_time: f64,
+        #[serde(default)]
+        criteria: Criteria,
+        #[serde(default)]
+        mu: Option<Mu>,
+    },
+    /// Event-driven hard-sphere (hard-disk) dynamics in the fixed cell with elastic collisions
+    /// until `collisions_per_grain` collisions per grain on average, from Maxwell velocities;
+    /// velocities are zero at the end (AR07 §III: melting the FCC lattice; §IV.B: mixing).
+    HardSphereMix { collisions_per_grain: f64 },
+    /// Lubachevsky–Stillinger growth of all diameters in event-driven dynamics until the solid
+    /// fraction reaches `packing_fraction` (AR07 §III.A, state A'); `rate` is the growth rate
+    /// of the diameters in units of the rms velocity. Velocities are zero at the end and the
+    /// length unit is rescaled so that the largest diameter is again a.
+    Grow {
+        packing_fraction: f64,
+        #[serde(default = "default_growth_rate")]
+        rate: f64,
+    },
+    /// Scales the cell and all coordinates by `factor` (AR07 §IV.B: λ = 1.005 opens the
+    /// contacts of a packing before mixing); velocities are set to zero.
+    Expand { factor: f64 },
+}
+
+fn default_growth_rate() -> f64 {
+    1e-2
 }
 
 impl Step {
-    pub fn max_time(&self) -> f64 {
+    /// Soft-contact (DEM) steps run the contact law; the others move hard grains.
+    pub fn is_dem(&self) -> bool {
+        matches!(
+            self,
+            Step::Compress { .. }
+                | Step::FixedVolume { .. }
+                | Step::Aggregate { .. }
+                | Step::PressureProgram { .. }
+        )
+    }
+    pub fn kind(&self) -> &'static str {
         match self {
-            Step::Compress { max_time, .. } | Step::FixedVolume { max_time, .. } => *max_time,
+            Step::Compress { .. } => "compress",
+            Step::FixedVolume { .. } => "fixed-volume",
+            Step::Aggregate { .. } => "aggregate",
+            Step::PressureProgram { .. } => "pressure-program",
+            Step::HardSphereMix { .. } => "hard-sphere-mix",
+            Step::Grow { .. } => "grow",
+            Step::Expand { .. } => "expand",
         }
     }
-    pub fn criteria(&self) -> &Criteria {
+    /// Time limit of a DEM step (of each level of a pressure program).
+    pub fn max_time(&self) -> f64 {
         match self {
-            Step::Compress { criteria, .. } | Step::FixedVolume { criteria, .. } => criteria,
+            Step::Compress { max_time, .. }
+            | Step::FixedVolume { max_time, .. }
+            | Step::Aggregate { max_time, .. }
+            | Step::PressureProgram { max_time, .. } => *max_time,
+            _ => 0.0,
+        }
+    }
+    pub fn criteria(&self) -> Criteria {
+        match self {
+            Step::Compress { criteria, .. }
+            | Step::FixedVolume { criteria, .. }
+            | Step::PressureProgram { criteria, .. } => criteria.clone(),
+            _ => Criteria::default(),
+        }
+    }
+    /// The μ override of a DEM step.
+    pub fn mu(&self) -> Option<Mu> {
+        match self {
+            Step::Compress { mu, .. }
+            | Step::FixedVolume { mu, .. }
+            | Step::Aggregate { mu, .. }
+            | Step::PressureProgram { mu, .. } => *mu,
+            _ => None,
+        }
+    }
+    /// Pressure levels of a pressure program, `from` to `to` inclusive.
+    pub fn pressure_levels(from: f64, to: f64, factor: f64) -> Vec<f64> {
+        let mut levels = vec![from];
+        let up = to >= from;
+        let mut p = from;
+        loop {
+            p = if up { p * factor } else { p / factor };
+            // A level within 0.1 % of the end is the end.
+            if (up && p >= to * (1.0 - 1e-3)) || (!up && p <= to * (1.0 + 1e-3)) {
+                if levels.last() != Some(&to) {
+                    levels.push(to);
+                }
+                return levels;
+            }
+            levels.push(p);
         }
     }
 }
@@ -559,16 +677,37 @@ impl Scene {
                 }
             }
         }
-        let phi_max = max_random_packing_fraction(self.dimension);
         let phi = self.initial.packing_fraction;
-        if !(phi.is_finite() && phi > 0.0 && phi <= phi_max) {
-            return Err(err(
-                "initial.packing_fraction",
-                format!(
-                    "must lie in (0, {phi_max}]: a random sequential placement of {} cannot reach {phi}",
-                    if self.dimension == 2 { "disks" } else { "spheres" }
-                ),
-            ));
+        match self.initial.arrangement {
+            Arrangement::Random => {
+                let phi_max = max_random_packing_fraction(self.dimension);
+                if !(phi.is_finite() && phi > 0.0 && phi <= phi_max) {
+                    return Err(err(
+                        "initial.packing_fraction",
+                        format!(
+                            "must lie in (0, {phi_max}]: a random sequential placement of {} cannot reach {phi}",
+                            if self.dimension == 2 { "disks" } else { "spheres" }
+                        ),
+                    ));
+                }
+            }
+            Arrangement::Fcc => {
+                let n = self.particles.count;
+                let k = (0..=1000usize).find(|k| 4 * k * k * k >= n).unwrap_or(0);
+                if self.dimension != 3 || 4 * k * k * k != n || dmin != 1.0 {
+                    return Err(err(
+                        "initial.arrangement",
+                        format!("\"fcc\" needs dimension = 3, equal diameters (particles.min_diameter = 1) and particles.count = 4k³ (500, 864, 2048, 4000, …), got dimension {} and {n} grains", self.dimension),
+                    ));
+                }
+                let fcc_max = std::f64::consts::PI / (3.0 * 2f64.sqrt());
+                if !(phi.is_finite() && phi > 0.0 && phi < fcc_max) {
+                    return Err(err(
+                        "initial.packing_fraction",
+                        format!("must lie in (0, {fcc_max:.4}) for an FCC lattice, got {phi}"),
+                    ));
+                }
+            }
         }
         if !(self.initial.rms_velocity.is_finite() && self.initial.rms_velocity >= 0.0) {
             return Err(err(
@@ -591,43 +730,96 @@ impl Scene {
         if self.protocol.is_empty() {
             return Err(err(
                 "protocol",
-                "needs at least one step ([[protocol]] with kind = \"compress\" or \"fixed-volume\")"
+                "needs at least one step ([[protocol]] with kind = \"compress\", \"fixed-volume\", \"aggregate\", \"pressure-program\", \"hard-sphere-mix\", \"grow\" or \"expand\")"
                     .into(),
             ));
         }
+        let cohesive = self.law.cohesion().is_some();
         for (k, step) in self.protocol.iter().enumerate() {
             let f = |name: &str| format!("protocol[{k}].{name}");
-            if let Step::Compress {
-                pressure,
-                inertia_cap,
-                ..
-            } = step
-            {
-                if !(pressure.is_finite() && *pressure >= 0.0) {
+            let check_pressure = |name: &str, pressure: f64| -> Result<(), SceneError> {
+                if !(pressure.is_finite() && pressure >= 0.0) {
                     return Err(err(
-                        &f("pressure"),
+                        &f(name),
                         format!("must be a finite number ≥ 0, got {pressure}"),
                     ));
                 }
-                if *pressure == 0.0 && self.law.cohesion().is_none() {
+                if pressure == 0.0 && !cohesive {
                     return Err(err(
-                        &f("pressure"),
+                        &f(name),
                         "must be > 0 without cohesion (a cohesionless packing cannot hold at P = 0)"
                             .into(),
                     ));
                 }
-                positive(&f("inertia_cap"), *inertia_cap)?;
+                Ok(())
+            };
+            match step {
+                Step::Compress {
+                    pressure,
+                    inertia_cap,
+                    ..
+                } => {
+                    check_pressure("pressure", *pressure)?;
+                    positive(&f("inertia_cap"), *inertia_cap)?;
+                }
+                Step::PressureProgram {
+                    from,
+                    to,
+                    factor,
+                    inertia_cap,
+                    ..
+                } => {
+                    check_pressure("from", *from)?;
+                    check_pressure("to", *to)?;
+                    if *from == 0.0 || *to == 0.0 {
+                        return Err(err(
+                            &f(if *from == 0.0 { "from" } else { "to" }),
+                            "must be > 0 (levels are multiples of each other)".into(),
+                        ));
+                    }
+                    if !(factor.is_finite() && *factor > 1.0 + 1e-6 && *factor <= 100.0) {
+                        return Err(err(
+                            &f("factor"),
+                            format!("must lie in (1, 100] (each level is the previous one times or divided by it), got {factor}"),
+                        ));
+                    }
+                    positive(&f("inertia_cap"), *inertia_cap)?;
+                }
+                Step::HardSphereMix {
+                    collisions_per_grain,
+                } => in_range(&f("collisions_per_grain"), *collisions_per_grain, 1e-3, 1e6)?,
+                Step::Grow {
+                    packing_fraction,
+                    rate,
+                } => {
+                    let top = if self.dimension == 2 { 0.9 } else { 0.74 };
+                    in_range(&f("packing_fraction"), *packing_fraction, 0.0, top)?;
+                    in_range(&f("rate"), *rate, 1e-9, 10.0)?;
+                }
+                Step::Expand { factor } => in_range(&f("factor"), *factor, 1.0, 2.0)?,
+                Step::FixedVolume { .. } | Step::Aggregate { .. } => {}
             }
-            positive(&f("max_time"), step.max_time())?;
-            let c = step.criteria();
-            positive(&f("criteria.force"), c.force)?;
-            positive(&f("criteria.moment"), c.moment)?;
-            positive(&f("criteria.pressure"), c.pressure)?;
-            positive(&f("criteria.kinetic"), c.kinetic)?;
-            if c.scale == ForceScale::Cohesion && self.law.cohesion().is_none() {
+            if let Some(mu) = step.mu() {
+                check_mu(&f("mu"), mu)?;
+            }
+            if step.is_dem() {
+                positive(&f("max_time"), step.max_time())?;
+                let c = step.criteria();
+                positive(&f("criteria.force"), c.force)?;
+                positive(&f("criteria.moment"), c.moment)?;
+                positive(&f("criteria.pressure"), c.pressure)?;
+                positive(&f("criteria.kinetic"), c.kinetic)?;
+                if c.scale == ForceScale::Cohesion && !cohesive {
+                    return Err(err(
+                        &f("criteria.scale"),
+                        "\"cohesion\" needs a cohesive law (law.cohesion); use \"pressure\"".into(),
+                    ));
+                }
+            }
+            if matches!(step, Step::Aggregate { .. }) && !cohesive {
                 return Err(err(
-                    &f("criteria.scale"),
-                    "\"cohesion\" needs a cohesive law (law.cohesion); use \"pressure\"".into(),
+                    &f("kind"),
+                    "\"aggregate\" needs a cohesive law (law.cohesion): cohesionless grains never form one cluster".into(),
                 ));
             }
         }
@@ -644,6 +836,49 @@ impl Scene {
             ));
         }
         Ok(())
+    }
+}
+
+impl Scene {
+    /// The protocol as run: each step, with pressure programs unrolled into one `compress`
+    /// step per level; paired with the index of the protocol step it comes from.
+    pub fn stages(&self) -> Vec<(usize, Step)> {
+        let mut out = Vec::new();
+        for (k, step) in self.protocol.iter().enumerate() {
+            match step {
+                Step::PressureProgram {
+                    from,
+                    to,
+                    factor,
+                    inertia_cap,
+                    max_time,
+                    criteria,
+                    mu,
+                } => {
+                    for p in Step::pressure_levels(*from, *to, *factor) {
+                        out.push((
+                            k,
+                            Step::Compress {
+                                pressure: p,
+                                inertia_cap: *inertia_cap,
+                                max_time: *max_time,
+                                criteria: criteria.clone(),
+                                mu: *mu,
+                            },
+                        ));
+                    }
+                }
+                _ => out.push((k, step.clone())),
+            }
+        }
+        out
+    }
+
+    /// Friction coefficient of a DEM step: its override or `law.mu`.
+    pub fn mu_of(&self, step: &Step) -> Mu {
+        step.mu().unwrap_or(match &self.law {
+            Law::HertzMindlin { mu, .. } | Law::Linear { mu, .. } => *mu,
+        })
     }
 }
 

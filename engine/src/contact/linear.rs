@@ -63,7 +63,7 @@ pub struct Linear<C, F, R> {
 }
 
 /// Per-pair history: tangential spring and rolling spring (each `()` when absent).
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct LinearHistory<T, G> {
     pub tangential: T,
     pub rolling: G,

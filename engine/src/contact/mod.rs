@@ -46,7 +46,13 @@ pub struct PairForce<D: Dim> {
 /// A contact (interaction) law.
 pub trait ContactLaw<D: Dim>: Copy + Send + Sync + std::fmt::Debug + 'static {
     /// Per-pair history (tangential spring, rolling spring); `()` when there is none.
-    type History: Copy + Default + Send + Sync + std::fmt::Debug;
+    type History: Copy
+        + Default
+        + Send
+        + Sync
+        + std::fmt::Debug
+        + serde::Serialize
+        + serde::de::DeserializeOwned;
     /// Does the law exert moments (friction or rolling resistance)? If not, rotations are not
     /// integrated at all.
     const MOMENTS: bool;

@@ -6,7 +6,13 @@ use crate::geometry::{keep_norm_in_plane, Dim, Linear};
 
 /// Sliding friction between grains.
 pub trait Friction: Copy + Send + Sync + std::fmt::Debug + 'static {
-    type State<D: Dim>: Copy + Default + Send + Sync + std::fmt::Debug;
+    type State<D: Dim>: Copy
+        + Default
+        + Send
+        + Sync
+        + std::fmt::Debug
+        + serde::Serialize
+        + serde::de::DeserializeOwned;
     const ACTIVE: bool;
     /// Updates the elastic tangential force (exerted by i on j) and returns it.
     ///
@@ -42,7 +48,7 @@ pub struct Coulomb {
 pub struct NoSlip;
 
 /// Tangential spring state: the elastic force and the stiffness it was built with.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Spring<V> {
     pub t: V,
     pub kt: f64,
@@ -137,7 +143,13 @@ impl Friction for NoSlip {
 
 /// Rolling resistance between grains (GRC07 (9)–(10)).
 pub trait RollingResistance: Copy + Send + Sync + std::fmt::Debug + 'static {
-    type State<D: Dim>: Copy + Default + Send + Sync + std::fmt::Debug;
+    type State<D: Dim>: Copy
+        + Default
+        + Send
+        + Sync
+        + std::fmt::Debug
+        + serde::Serialize
+        + serde::de::DeserializeOwned;
     const ACTIVE: bool;
     /// Updates the rolling moment exerted by i on j given the relative rolling rotation
     /// increment `dtheta` (ω_j − ω_i, rolling part, times dt) and returns it.
