@@ -10,6 +10,9 @@
 //! * [`rattlers`]: the rattler algorithm (AR07 §III.B, §IV.D; GRC07 §III.A).
 //! * [`metrics`]: [`analyze`], [`Options`], [`Analysis`].
 //! * [`report`]: markdown table and JSON renderings.
+//! * [`paper`]: the published values of `golden/paper-values.toml` (SPEC §6).
+//! * [`reproduction`]: our values over seeds against the published ones, with verdicts.
+//! * [`plots`]: P(f) with the DTS fit, g(r) and generic line plots as SVG + PNG.
 //!
 //! ```no_run
 //! use grainbench_comparisons::{analyze, report, Options};
@@ -20,8 +23,11 @@
 //! ```
 
 pub mod metrics;
+pub mod paper;
+pub mod plots;
 pub mod rattlers;
 pub mod report;
+pub mod reproduction;
 
 #[cfg(test)]
 mod fixtures;
