@@ -9,9 +9,34 @@ macro_rules! scenes {
 /// (name, TOML text) of every embedded scene; `default` is what a bare `grainbench run` runs.
 pub const SCENES: &[(&str, &str)] = scenes!(
     "default",
+    "ar07-A",
+    "ar07-A-ci",
+    "ar07-Aprime",
+    "ar07-Aprime-ci",
+    "ar07-B",
+    "ar07-B-ci",
+    "ar07-C",
+    "ar07-C-ci",
+    "ar07-D",
+    "ar07-D-QS",
+    "ar07-D-ci",
+    "ar07-Z",
+    "ar07-Z-ci",
     "ar07-frictionless-small",
     "grc07-cohesionless-small",
     "grc07-cohesive-small",
+    "grc07-type1-phi013-mu05",
+    "grc07-type1-phi013-mu05-rr",
+    "grc07-type1-phi036-mu05",
+    "grc07-type1-phi036-mu05-rr",
+    "grc07-type1-phi036-mu05-rr-ci",
+    "grc07-type1-phi052-mu05",
+    "grc07-type1-phi052-mu05-rr",
+    "grc07-type2-phi036",
+    "grc07-type2-phi036-ci",
+    "grc07-type2-phi036-rr",
+    "grc07-type2-phi036-rr-ci",
+    "grc08-cycle-rr",
 );
 
 /// The embedded scene called `name`.
@@ -29,6 +54,13 @@ mod tests {
         for (name, text) in SCENES {
             let scene = crate::Scene::from_toml(text, Path::new(name)).unwrap();
             assert_eq!(&scene.name, name);
+        }
+        // Every scene file is embedded.
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../reference-inputs/scenes");
+        for f in std::fs::read_dir(dir).unwrap() {
+            let name = f.unwrap().file_name().into_string().unwrap();
+            let stem = name.trim_end_matches(".toml");
+            assert!(scene_text(stem).is_some(), "{name} is not embedded");
         }
     }
 }

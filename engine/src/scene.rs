@@ -910,7 +910,7 @@ mod tests {
     #[test]
     fn valid_scene_parses_with_presets() {
         let s = Scene::from_toml(BASE, Path::new("s.toml")).unwrap();
-        assert_eq!(s.protocol[0].criteria(), &Criteria::grc07());
+        assert_eq!(s.protocol[0].criteria(), Criteria::grc07());
         assert!(s.law.cohesion().is_some());
     }
 
