@@ -8,7 +8,11 @@ use grainbench_engine::{library, snapshot, Scene, Snapshot};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+
+mod reproduce;
+
+/// Set by the first Ctrl-C (or SIGTERM): runs stop cleanly at their next check.
+static STOP: AtomicBool = AtomicBool::new(false);
 
 #[derive(Parser)]
 #[command(
@@ -57,6 +61,36 @@ enum Command {
     },
     /// List the embedded scenes.
     Scenes,
+    /// Run a paper's state at paper size over several seeds and compare every metric with the
+    /// published values (table in Markdown/CSV/JSON, P(f) and g(r) plots). Interrupted runs
+    /// continue where they stopped when the same command is given again.
+    Reproduce {
+        /// ar07, grc07 or grc08.
+        paper: String,
+        /// State: A, Aprime, B, C, D, Z, D-QS (AR07); type1-phi036-mu05, type2-phi036-rr, …
+        /// (GRC07); cycle-rr (GRC08). `grainbench scenes` lists them as <paper>-<state>.
+        #[arg(long)]
+        state: String,
+        /// Seeds, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "1")]
+        seeds: Vec<u64>,
+        /// The reduced CI variant of the scene (`<paper>-<state>-ci`).
+        #[arg(long)]
+        ci: bool,
+        /// Output directory (default: `runs/reproduce/<scene>`).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Also write golden/<scene>/rust.json (command, seeds, wall times, metrics).
+        #[arg(long)]
+        record: bool,
+        #[arg(long, short = 'j')]
+        threads: Option<usize>,
+        #[arg(long, short)]
+        quiet: bool,
+        /// Seconds of wall time between checkpoints.
+        #[arg(long, default_value_t = 60.0, value_name = "SECS")]
+        checkpoint_every: f64,
+    },
 }
 
 fn main() {
@@ -107,6 +141,32 @@ fn dispatch(cli: Cli) -> Result<i32> {
             Ok(code)
         }
         Command::Analyze { snapshot, json } => analyze(&snapshot, json),
+        Command::Reproduce {
+            paper,
+            state,
+            seeds,
+            ci,
+            out,
+            record,
+            threads,
+            quiet,
+            checkpoint_every,
+        } => {
+            set_threads(threads)?;
+            reproduce::reproduce(&reproduce::Args {
+                paper,
+                state,
+                seeds,
+                ci,
+                out,
+                record,
+                flags: RunFlags {
+                    quiet,
+                    resume: false,
+                    checkpoint_every,
+                },
+            })
+        }
         Command::Scenes => {
             for (name, text) in library::SCENES {
                 let scene = Scene::from_toml(text, Path::new(name))?;
@@ -121,7 +181,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
 }
 
 /// Loads a scene from a file, or an embedded one by name.
-fn load_scene(spec: &str) -> Result<Scene> {
+pub(crate) fn load_scene(spec: &str) -> Result<Scene> {
     let path = Path::new(spec);
     if path.exists() {
         return Ok(Scene::from_file(path)?);
@@ -140,10 +200,11 @@ fn load_scene(spec: &str) -> Result<Scene> {
 }
 
 /// Options of one run.
-struct RunFlags {
-    quiet: bool,
-    resume: bool,
-    checkpoint_every: f64,
+#[derive(Clone)]
+pub(crate) struct RunFlags {
+    pub(crate) quiet: bool,
+    pub(crate) resume: bool,
+    pub(crate) checkpoint_every: f64,
 }
 
 fn set_threads(threads: Option<usize>) -> Result<()> {
@@ -156,7 +217,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
     Ok(())
 }
 
-const CHECKPOINT: &str = "checkpoint.bin";
+pub(crate) const CHECKPOINT: &str = "checkpoint.bin";
 
 /// The scene and output directory of `run`: with `--resume` the scene may come from the
 /// checkpoint of the output directory.
@@ -177,7 +238,7 @@ fn scene_and_out(spec: Option<&str>, out: Option<PathBuf>, resume: bool) -> Resu
 
 /// Runs one scene into `out` (writing the snapshot, summary and checkpoints); returns the
 /// exit status and the outcome when the run ended normally or was interrupted.
-fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outcome>)> {
+pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outcome>)> {
     let quiet = flags.quiet;
     let scene = scene.clone();
     let cp_path = out.join(CHECKPOINT);
@@ -202,16 +263,16 @@ fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outco
     }
     std::fs::create_dir_all(out)
         .with_context(|| format!("creating the output directory {}", out.display()))?;
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
+    static HANDLER: std::sync::Once = std::sync::Once::new();
+    HANDLER.call_once(|| {
         // A second Ctrl-C kills at once; the first one stops cleanly at the next check.
-        let _ = ctrlc::set_handler(move || {
-            if stop.swap(true, Ordering::SeqCst) {
+        let _ = ctrlc::set_handler(|| {
+            if STOP.swap(true, Ordering::SeqCst) {
                 std::process::exit(130);
             }
         });
-    }
+    });
+    let stop = &STOP;
     eprintln!(
         "grainbench {}: scene {} ({}D, N = {}, {} threads) → {}",
         env!("CARGO_PKG_VERSION"),
@@ -283,7 +344,7 @@ fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outco
         &scene,
         &mut RunOptions {
             progress: Some(&mut on_progress),
-            stop: Some(&stop),
+            stop: Some(stop),
             checkpoint: Some(CheckpointSpec {
                 path: cp_path.clone(),
                 every: flags.checkpoint_every,
@@ -313,6 +374,9 @@ fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outco
     outcome.snapshot.write(&snap_path)?;
     let summary = serde_json::json!({
         "scene": scene.name,
+        "seed": scene.seed,
+        "settings": scene,
+        "engine": env!("CARGO_PKG_VERSION"),
         "dimension": scene.dimension,
         "n": scene.particles.count,
         "law": outcome.law,

@@ -1,0 +1,235 @@
+//! `grainbench reproduce PAPER --state S`: runs the named state of a paper over several seeds
+//! (checkpointed, resumable), measures every metric with the same code as `analyze`, and
+//! writes the table against the published values (golden/paper-values.toml) and the plots.
+
+use crate::{load_scene, run, RunFlags};
+use anyhow::{bail, Context, Result};
+use grainbench_comparisons::metrics::{analyze, Analysis};
+use grainbench_comparisons::{paper, plots, reproduction};
+use grainbench_engine::{library, snapshot, Snapshot};
+use std::path::{Path, PathBuf};
+
+pub struct Args {
+    pub paper: String,
+    pub state: String,
+    pub seeds: Vec<u64>,
+    pub ci: bool,
+    pub out: Option<PathBuf>,
+    pub record: bool,
+    pub flags: RunFlags,
+}
+
+/// One finished seed.
+struct SeedRun {
+    seed: u64,
+    snapshot: Snapshot,
+    wall_seconds: f64,
+    status: String,
+    steps: serde_json::Value,
+}
+
+/// The states `reproduce` knows for `paper` (embedded scenes named `<paper>-<state>`).
+fn states_of(paper: &str) -> Vec<String> {
+    library::SCENES
+        .iter()
+        .filter_map(|(n, _)| n.strip_prefix(&format!("{paper}-")))
+        .filter(|s| !s.ends_with("-ci"))
+        .map(String::from)
+        .collect()
+}
+
+pub fn reproduce(a: &Args) -> Result<i32> {
+    let paper = a.paper.to_lowercase();
+    if !["ar07", "grc07", "grc08"].contains(&paper.as_str()) {
+        bail!(
+            "unknown paper {:?}: expected ar07, grc07 or grc08",
+            a.paper
+        );
+    }
+    let state_key = format!("{paper}-{}", a.state);
+    let scene_name = if a.ci {
+        format!("{state_key}-ci")
+    } else {
+        state_key.clone()
+    };
+    if library::scene_text(&scene_name).is_none() {
+        bail!(
+            "no scene {scene_name:?} for {paper} state {:?}; states with scenes: {}{}",
+            a.state,
+            states_of(&paper).join(", "),
+            if a.ci {
+                " (CI variants exist for some: drop --ci for the paper-size scene)"
+            } else {
+                ""
+            }
+        );
+    }
+    if a.seeds.is_empty() {
+        bail!("--seeds needs at least one seed");
+    }
+    let base = load_scene(&scene_name)?;
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("runs/reproduce").join(&scene_name));
+    let mut runs = Vec::new();
+    for (k, &seed) in a.seeds.iter().enumerate() {
+        let mut scene = base.clone();
+        scene.seed = seed;
+        let dir = out.join(format!("seed-{seed}"));
+        eprintln!(
+            "reproduce {scene_name}: seed {seed} ({} of {}) → {}",
+            k + 1,
+            a.seeds.len(),
+            dir.display()
+        );
+        if let Some(done) = finished(&dir, &scene)? {
+            eprintln!("  finished earlier: reusing {}", dir.display());
+            runs.push(done);
+            continue;
+        }
+        let flags = RunFlags {
+            resume: dir.join(crate::CHECKPOINT).exists(),
+            ..a.flags.clone()
+        };
+        let (code, outcome) = run(&scene, &dir, &flags)?;
+        if code != 0 {
+            if code == 130 {
+                eprintln!("interrupted: run the same command again to continue where it stopped");
+            }
+            return Ok(code);
+        }
+        let o = outcome.expect("a run that exits 0 has an outcome");
+        runs.push(SeedRun {
+            seed,
+            status: o.snapshot.status.clone(),
+            wall_seconds: o.wall_seconds,
+            steps: serde_json::to_value(&o.steps)?,
+            snapshot: o.snapshot,
+        });
+    }
+    let analyses: Vec<Analysis> = runs
+        .iter()
+        .map(|r| analyze(&r.snapshot, &Default::default()))
+        .collect();
+    let values: Vec<Vec<(String, f64)>> = analyses.iter().map(|a| a.metric_values()).collect();
+    let table = reproduction::build(&state_key, &values)
+        .with_context(|| format!("building the table of {state_key}"))?;
+    std::fs::create_dir_all(&out)?;
+    snapshot::write_atomic(&out.join("report.md"), table.to_markdown().as_bytes())?;
+    snapshot::write_atomic(&out.join("report.csv"), table.to_csv().as_bytes())?;
+    snapshot::write_atomic(&out.join("report.json"), table.to_json().as_bytes())?;
+    let plotted = write_plots(&out, &runs, &analyses);
+    let not_equilibrated: Vec<u64> = runs
+        .iter()
+        .filter(|r| r.status != "equilibrium")
+        .map(|r| r.seed)
+        .collect();
+    println!();
+    print!("{}", table.to_markdown());
+    if !not_equilibrated.is_empty() {
+        println!(
+            "\nwarning: seeds {not_equilibrated:?} ended on a time limit, not at equilibrium: their metrics are of an unfinished packing"
+        );
+    }
+    let misses = table.misses();
+    println!(
+        "\n{} of {} published metrics reproduced within 2 paper s.d. (1 % without one); {misses} MISS",
+        table.rows.iter().filter(|r| r.verdict.as_str() == "ok").count(),
+        table.rows.len()
+    );
+    println!("report     {}", out.join("report.md").display());
+    for p in plotted {
+        println!("plot       {}", p.display());
+    }
+    if a.record {
+        let path = record(a, &scene_name, &state_key, &runs, &values, &table)?;
+        println!("recorded   {}", path.display());
+    }
+    Ok(0)
+}
+
+/// A seed that finished earlier with the same settings.
+fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedRun>> {
+    let summary = dir.join("summary.json");
+    if dir.join(crate::CHECKPOINT).exists() || !summary.exists() {
+        return Ok(None);
+    }
+    let s: serde_json::Value = serde_json::from_slice(&std::fs::read(&summary)?)
+        .with_context(|| format!("reading {}", summary.display()))?;
+    let same = serde_json::to_value(scene)? == s["settings"];
+    let status = s["status"].as_str().unwrap_or("").to_string();
+    if !same || status == "interrupted" {
+        return Ok(None);
+    }
+    let snap = Snapshot::read(&dir.join(&scene.output.snapshot))?;
+    Ok(Some(SeedRun {
+        seed: scene.seed,
+        snapshot: snap,
+        wall_seconds: s["wall_seconds"].as_f64().unwrap_or(f64::NAN),
+        status,
+        steps: s["steps"].clone(),
+    }))
+}
+
+/// P(f) and g(r) of every seed; the DTS fit for frictionless sphere packings (AR07 Fig. 4).
+fn write_plots(out: &Path, runs: &[SeedRun], analyses: &[Analysis]) -> Vec<PathBuf> {
+    let mut written = Vec::new();
+    let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
+    let pf: Vec<Vec<(f64, f64)>> = analyses.iter().map(|a| a.pf_points()).collect();
+    let gr: Vec<Vec<(f64, f64)>> = runs.iter().map(|r| Analysis::gr_points(&r.snapshot)).collect();
+    let frictionless_spheres = analyses
+        .first()
+        .is_some_and(|a| a.dimension == 3 && a.mu == Some(0.0));
+    let series = |pts: &[Vec<(f64, f64)>]| -> Vec<plots::Series<'_>> {
+        pts.iter()
+            .zip(&labels)
+            .filter(|(p, _)| !p.is_empty())
+            .map(|(p, l)| plots::Series::new(l, p))
+            .collect()
+    };
+    match plots::force_distribution(&out.join("pf"), &series(&pf), frictionless_spheres) {
+        Ok(f) => written.extend([f.svg, f.png]),
+        Err(e) => eprintln!("warning: no P(f) plot: {e}"),
+    }
+    match plots::pair_correlation(&out.join("gr"), &series(&gr), Some(8.0)) {
+        Ok(f) => written.extend([f.svg, f.png]),
+        Err(e) => eprintln!("warning: no g(r) plot: {e}"),
+    }
+    written
+}
+
+/// Writes golden/<scene>/rust.json: what was run, how long it took, and every metric per seed.
+fn record(
+    a: &Args,
+    scene_name: &str,
+    state_key: &str,
+    runs: &[SeedRun],
+    values: &[Vec<(String, f64)>],
+    table: &reproduction::Reproduction,
+) -> Result<PathBuf> {
+    let path = Path::new("golden").join(scene_name).join("rust.json");
+    let seeds: Vec<String> = a.seeds.iter().map(|s| s.to_string()).collect();
+    let doc = serde_json::json!({
+        "code": format!("grainbench {}", env!("CARGO_PKG_VERSION")),
+        "scene": scene_name,
+        "paper_state": state_key,
+        "paper_description": paper::paper_values(state_key).map(|s| s.description.clone()),
+        "command": format!(
+            "grainbench reproduce {} --state {}{} --seeds {} -j {}",
+            a.paper, a.state, if a.ci { " --ci" } else { "" }, seeds.join(","), rayon::current_num_threads()
+        ),
+        "threads": rayon::current_num_threads(),
+        "n": runs.first().map(|r| r.snapshot.particles.radius.len()),
+        "seeds": runs.iter().zip(values).map(|(r, v)| serde_json::json!({
+            "seed": r.seed,
+            "status": r.status,
+            "wall_seconds": r.wall_seconds,
+            "stages": r.steps,
+            "metrics": v.iter().cloned().collect::<std::collections::BTreeMap<String, f64>>(),
+        })).collect::<Vec<_>>(),
+        "table": table,
+    });
+    snapshot::write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
+    Ok(path)
+}
