@@ -6,7 +6,7 @@
 //! [`contact`] (contact laws), [`neighbor`] (cell lists + Verlet skin), [`system`] (state and
 //! integrator), [`init`] (random gas), [`scene`] (scene files), [`run`] (protocols, equilibrium
 //! criteria, blow-up detection), [`snapshot`] (on-disk configurations), [`library`] (embedded
-//! scenes).
+//! scenes), [`protocols`] (event-driven hard grains, Lubachevsky–Stillinger growth, FCC).
 
 pub mod cell;
 pub mod contact;
@@ -14,6 +14,7 @@ pub mod geometry;
 pub mod init;
 pub mod library;
 pub mod neighbor;
+pub mod protocols;
 pub mod run;
 pub mod scene;
 pub mod snapshot;
