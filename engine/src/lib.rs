@@ -6,7 +6,7 @@
 //! [`contact`] (contact laws), [`neighbor`] (cell lists + Verlet skin), [`system`] (state and
 //! integrator), [`init`] (random gas), [`scene`] (scene files), [`run`] (protocols, equilibrium
 //! criteria, blow-up detection), [`snapshot`] (on-disk configurations), [`library`] (embedded
-//! scenes).
+//! scenes), [`protocols`] (event-driven hard grains, Lubachevsky–Stillinger growth, FCC).
 
 pub mod cell;
 pub mod checkpoint;
