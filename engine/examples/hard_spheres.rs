@@ -3,9 +3,11 @@
 //! 0.45 → 0.49 → 0.58 → 0.61 at rate 1e-2, with the collisions per grain of each interval.
 //!
 //! ```text
-//! cargo run --release -p grainbench-engine --example hard_spheres [K] [RATE] [SEED]
+//! cargo run --release -p grainbench-engine --example hard_spheres [K] [RATE] [SEED] [jam]
 //! ```
-//! (n = 4K³, default K = 10.)
+//! (n = 4K³, default K = 10; with `jam`, also times the refusal of an impossible target,
+//! Φ = 0.75, which runs the packing into jamming.) Collisions per grain are 2 × pair
+//! collisions / n.
 
 use grainbench_engine::geometry::D3;
 use grainbench_engine::protocols::event_driven::HardSpheres;
@@ -60,6 +62,9 @@ fn main() {
         total.elapsed().as_secs_f64(),
         hs.max_overlap().unwrap().2
     );
+    if args.get(4).map(String::as_str) != Some("jam") {
+        return;
+    }
     let clock = Instant::now();
     match hs.grow(0.75, rate) {
         Ok(_) => println!("grow to 0.75 succeeded?!"),

@@ -11,7 +11,10 @@
 //!   (prediction counter), a collision is void when the partner's velocity changed since
 //!   (trajectory counter) and the grain is then re-predicted;
 //! - free flight between events, positions advanced lazily per grain (per-grain time stamp);
-//!   O(log n) per event.
+//!   O(log n) per event;
+//! - box lengths of at least two (final) largest diameters, so that a pair in contact is its
+//!   minimum image; pairs in contact that approach more slowly than 1e-11 (relative) are
+//!   taken as grazing, which stops roundoff from repeating a collision.
 //!
 //! Units: whatever the caller uses (lengths of the box and radii, masses, velocities); the
 //! time unit follows. Collision counts "per grain" are 2 × (pair collisions) / n: the average
@@ -406,10 +409,7 @@ impl<D: Dim> HardSpheres<D> {
     fn finish(&mut self, eng: &mut Engine<D>, t: f64) -> Stats {
         eng.t = t;
         eng.flush_kinetic();
-        for i in 0..self.len() {
-            eng.advance(self, i);
-            wrap::<D>(&mut self.s[i]);
-        }
+        eng.write_back(self);
         self.time += t;
         self.collisions += eng.collisions;
         self.stats(eng, t)
@@ -516,28 +516,43 @@ impl<D: Dim> Grid<D> {
     #[inline]
     fn for_neighbours(&self, i: usize, mut f: impl FnMut(usize, D::V)) {
         let ci = self.cell[i];
-        for k in 0..3usize.pow(D::D as u32) {
-            let mut cj = [0usize; 3];
-            let mut shift = D::V::zero();
-            let mut kk = k;
-            for a in 0..D::D {
-                let m = self.m[a] as i64;
-                let c = ci[a] as i64 + (kk % 3) as i64 - 1;
-                kk /= 3;
-                cj[a] = if c < 0 {
-                    shift[a] = -1.0;
-                    (c + m) as usize
-                } else if c >= m {
-                    shift[a] = 1.0;
-                    (c - m) as usize
+        // Per axis: the three neighbour layers as (flat index contribution, image shift).
+        let mut layer = [[(0usize, 0.0f64); 3]; 3];
+        let mut stride = 1;
+        for a in 0..D::D {
+            let m = self.m[a];
+            let c = ci[a];
+            layer[a] = [
+                if c == 0 {
+                    ((m - 1) * stride, -1.0)
                 } else {
-                    c as usize
-                };
-            }
-            let mut j = self.head[self.flat(cj)];
-            while j != NONE {
-                f(j as usize, shift);
-                j = self.next[j as usize];
+                    ((c - 1) * stride, 0.0)
+                },
+                (c * stride, 0.0),
+                if c + 1 == m {
+                    (0, 1.0)
+                } else {
+                    ((c + 1) * stride, 0.0)
+                },
+            ];
+            stride *= m;
+        }
+        let nz = if D::D == 3 { 3 } else { 1 };
+        for &(kz, sz) in &layer[2][..nz] {
+            for &(ky, sy) in &layer[1] {
+                for &(kx, sx) in &layer[0] {
+                    let mut shift = D::V::zero();
+                    shift[0] = sx;
+                    shift[1] = sy;
+                    if D::D == 3 {
+                        shift[2] = sz;
+                    }
+                    let mut j = self.head[kx + ky + kz];
+                    while j != NONE {
+                        f(j as usize, shift);
+                        j = self.next[j as usize];
+                    }
+                }
             }
         }
     }
@@ -592,12 +607,23 @@ enum Halt {
     Idle,
 }
 
-/// Event calendar and cell list of one run; time counts from the start of the run.
+/// Per-grain state read by the prediction loop, packed in one cache line: the reduced
+/// position at time `stamp`, the absolute velocity, the radius at the start of the run.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Grain<D: Dim> {
+    s: D::V,
+    v: D::V,
+    stamp: f64,
+    r: f64,
+}
+
+/// Event calendar, cell list and grain states of one run (positions and velocities are
+/// written back to [`HardSpheres`] at the end); time counts from the start of the run.
 struct Engine<D: Dim> {
     grid: Grid<D>,
+    grains: Vec<Grain<D>>,
     inv_l: D::V,
-    /// Time at which `s[i]` is valid.
-    stamp: Vec<f64>,
     /// Prediction counters (heap entry validity).
     pred: Vec<u32>,
     /// Trajectory counters (partner validity).
@@ -622,8 +648,8 @@ impl<D: Dim> Engine<D> {
     fn empty() -> Self {
         Engine {
             grid: Grid::new(D::V::zero(), 1.0, &[]),
+            grains: Vec::new(),
             inv_l: D::V::zero(),
-            stamp: Vec::new(),
             pred: Vec::new(),
             traj: Vec::new(),
             heap: BinaryHeap::new(),
@@ -648,10 +674,18 @@ impl<D: Dim> Engine<D> {
         for a in 0..D::D {
             inv_l[a] = 1.0 / hs.l[a];
         }
+        let grains = (0..n)
+            .map(|i| Grain {
+                s: hs.s[i],
+                v: hs.vel[i],
+                stamp: 0.0,
+                r: hs.radius[i],
+            })
+            .collect();
         let mut eng = Engine {
             grid: Grid::new(hs.l, width, &hs.s),
+            grains,
             inv_l,
-            stamp: vec![0.0; n],
             pred: vec![0; n],
             traj: vec![0; n],
             heap: BinaryHeap::with_capacity(4 * n),
@@ -660,18 +694,29 @@ impl<D: Dim> Engine<D> {
             ..Self::empty()
         };
         for i in 0..n {
-            eng.predict(hs, i);
+            eng.predict(hs.l, i);
         }
         eng
     }
 
     /// Free flight of grain i up to the current time.
     #[inline]
-    fn advance(&mut self, hs: &mut HardSpheres<D>, i: usize) {
-        let dt = self.t - self.stamp[i];
+    fn advance(&mut self, i: usize) {
+        let p = &mut self.grains[i];
+        let dt = self.t - p.stamp;
         if dt != 0.0 {
-            hs.s[i] += D::mul(hs.vel[i], self.inv_l) * dt;
-            self.stamp[i] = self.t;
+            p.s += D::mul(p.v, self.inv_l) * dt;
+            p.stamp = self.t;
+        }
+    }
+
+    /// Writes positions (at the current time, wrapped) and velocities back.
+    fn write_back(&mut self, hs: &mut HardSpheres<D>) {
+        for i in 0..self.grains.len() {
+            self.advance(i);
+            hs.s[i] = self.grains[i].s;
+            wrap::<D>(&mut hs.s[i]);
+            hs.vel[i] = self.grains[i].v;
         }
     }
 
@@ -681,10 +726,10 @@ impl<D: Dim> Engine<D> {
     }
 
     /// Pushes the earliest event of grain i (already advanced to the current time).
-    fn predict(&mut self, hs: &HardSpheres<D>, i: usize) {
+    fn predict(&mut self, l: D::V, i: usize) {
         let t = self.t;
-        let si = hs.s[i];
-        let vi = hs.vel[i];
+        let Grain { s: si, v: vi, .. } = self.grains[i];
+        let ri = self.grains[i].r;
         let sdi = D::mul(vi, self.inv_l);
         let mut best = f64::INFINITY;
         let mut kind = None;
@@ -705,15 +750,16 @@ impl<D: Dim> Engine<D> {
             }
         }
         let grow = 1.0 + self.g * t;
-        let (stamp, inv_l, g, traj) = (&self.stamp, self.inv_l, self.g, &self.traj);
+        let (grains, inv_l, g, traj) = (&self.grains, self.inv_l, self.g, &self.traj);
         self.grid.for_neighbours(i, |j, shift| {
             if j == i {
                 return;
             }
-            let sj = hs.s[j] + D::mul(hs.vel[j], inv_l) * (t - stamp[j]);
-            let dr = D::mul(sj + shift - si, hs.l);
-            let dv = hs.vel[j] - vi;
-            let sigma0 = hs.radius[i] + hs.radius[j];
+            let pj = &grains[j];
+            let sj = pj.s + D::mul(pj.v, inv_l) * (t - pj.stamp);
+            let dr = D::mul(sj + shift - si, l);
+            let dv = pj.v - vi;
+            let sigma0 = ri + pj.r;
             if let Some(dt) = collision_time::<D>(dr, dv, sigma0 * grow, sigma0 * g) {
                 if dt < best {
                     best = dt;
@@ -734,17 +780,17 @@ impl<D: Dim> Engine<D> {
         }
     }
 
-    fn repredict(&mut self, hs: &mut HardSpheres<D>, i: usize) {
-        self.advance(hs, i);
+    fn repredict(&mut self, l: D::V, i: usize) {
+        self.advance(i);
         self.pred[i] = self.pred[i].wrapping_add(1);
-        self.predict(hs, i);
+        self.predict(l, i);
     }
 
     /// Processes events up to `t_end`, until the collision counter reaches `max_collisions`,
     /// or `max_events` valid events.
     fn run(
         &mut self,
-        hs: &mut HardSpheres<D>,
+        hs: &HardSpheres<D>,
         t_end: f64,
         max_collisions: u64,
         max_events: u64,
@@ -773,7 +819,7 @@ impl<D: Dim> Engine<D> {
                 Kind::Collide { partner, traj } => {
                     let j = partner as usize;
                     if self.traj[j] != traj {
-                        self.repredict(hs, i);
+                        self.repredict(hs.l, i);
                     } else {
                         self.collide(hs, i, j);
                         if self.collisions >= max_collisions {
@@ -781,7 +827,7 @@ impl<D: Dim> Engine<D> {
                         }
                     }
                 }
-                Kind::Cross { axis, up } => self.cross(hs, i, axis as usize, up),
+                Kind::Cross { axis, up } => self.cross(hs.l, i, axis as usize, up),
             }
             if self.heap.len() > 8 * n + 1024 {
                 let pred = &self.pred;
@@ -792,18 +838,19 @@ impl<D: Dim> Engine<D> {
 
     /// Elastic collision of i and j now; with growth, elastic in the frame of the growing
     /// surfaces (u' = 2σ̇ − u, at least σ̇(1 + 1e-6)).
-    fn collide(&mut self, hs: &mut HardSpheres<D>, i: usize, j: usize) {
-        self.advance(hs, i);
-        self.advance(hs, j);
-        let mut ds = hs.s[j] - hs.s[i];
+    fn collide(&mut self, hs: &HardSpheres<D>, i: usize, j: usize) {
+        self.advance(i);
+        self.advance(j);
+        let (pi, pj) = (self.grains[i], self.grains[j]);
+        let mut ds = pj.s - pi.s;
         for a in 0..D::D {
             ds[a] -= ds[a].round();
         }
         let r = D::mul(ds, hs.l);
         let dist = r.norm();
         let nrm = r * (1.0 / dist);
-        let sigma_dot = (hs.radius[i] + hs.radius[j]) * self.g;
-        let u = (hs.vel[j] - hs.vel[i]).dot(&nrm);
+        let sigma_dot = (pi.r + pj.r) * self.g;
+        let u = (pj.v - pi.v).dot(&nrm);
         let mut after = 2.0 * sigma_dot - u;
         if self.g > 0.0 {
             after = after.max(sigma_dot * (1.0 + SEPARATION_MARGIN));
@@ -813,27 +860,29 @@ impl<D: Dim> Engine<D> {
             let (mi, mj) = (hs.mass[i], hs.mass[j]);
             let impulse = mi * mj / (mi + mj) * du;
             self.flush_kinetic();
-            let before = mi * hs.vel[i].norm_squared() + mj * hs.vel[j].norm_squared();
-            hs.vel[i] -= nrm * (impulse / mi);
-            hs.vel[j] += nrm * (impulse / mj);
-            self.mv2 += mi * hs.vel[i].norm_squared() + mj * hs.vel[j].norm_squared() - before;
+            let before = mi * pi.v.norm_squared() + mj * pj.v.norm_squared();
+            let vi = pi.v - nrm * (impulse / mi);
+            let vj = pj.v + nrm * (impulse / mj);
+            self.grains[i].v = vi;
+            self.grains[j].v = vj;
+            self.mv2 += mi * vi.norm_squared() + mj * vj.norm_squared() - before;
             self.virial += impulse * dist;
             self.collisions += 1;
             self.traj[i] = self.traj[i].wrapping_add(1);
             self.traj[j] = self.traj[j].wrapping_add(1);
         }
-        self.repredict(hs, i);
-        self.repredict(hs, j);
+        self.repredict(hs.l, i);
+        self.repredict(hs.l, j);
     }
 
     /// Grain i crosses a cell face: snapped onto it, moved to the next cell (wrapping through
     /// the periodic boundary), re-predicted.
-    fn cross(&mut self, hs: &mut HardSpheres<D>, i: usize, axis: usize, up: bool) {
-        self.advance(hs, i);
+    fn cross(&mut self, l: D::V, i: usize, axis: usize, up: bool) {
+        self.advance(i);
         let m = self.grid.m[axis];
         let mut c = self.grid.cell[i];
         self.grid.remove(i);
-        let x = &mut hs.s[i][axis];
+        let x = &mut self.grains[i].s[axis];
         if up {
             *x = (c[axis] + 1) as f64 / m as f64;
             if c[axis] + 1 == m {
@@ -854,29 +903,37 @@ impl<D: Dim> Engine<D> {
         self.grid.insert(i, c);
         self.crossings += 1;
         self.pred[i] = self.pred[i].wrapping_add(1);
-        self.predict(hs, i);
+        self.predict(l, i);
     }
 
     /// All grains to the current time, velocities scaled so that Σ m v² = `mv2`, all events
     /// predicted afresh (LS growth).
-    fn rescale(&mut self, hs: &mut HardSpheres<D>, mv2: f64) {
+    fn rescale(&mut self, hs: &HardSpheres<D>, mv2: f64) {
         self.flush_kinetic();
-        for i in 0..hs.len() {
-            self.advance(hs, i);
-        }
-        let now = hs.mv2();
+        let now: f64 = self
+            .grains
+            .iter()
+            .zip(&hs.mass)
+            .map(|(p, &m)| m * p.v.norm_squared())
+            .sum();
         if now > 0.0 {
             let lambda = (mv2 / now).sqrt();
-            for v in hs.vel.iter_mut() {
-                *v = *v * lambda;
+            for i in 0..self.grains.len() {
+                self.advance(i);
+                self.grains[i].v = self.grains[i].v * lambda;
             }
         }
-        self.mv2 = hs.mv2();
+        self.mv2 = self
+            .grains
+            .iter()
+            .zip(&hs.mass)
+            .map(|(p, &m)| m * p.v.norm_squared())
+            .sum();
         self.heap.clear();
-        for i in 0..hs.len() {
+        for i in 0..self.grains.len() {
             self.traj[i] = self.traj[i].wrapping_add(1);
             self.pred[i] = self.pred[i].wrapping_add(1);
-            self.predict(hs, i);
+            self.predict(hs.l, i);
         }
         self.rescalings += 1;
     }
@@ -986,6 +1043,27 @@ mod tests {
             collision_time::<D2>(touch, Vector2::new(-1e-3, 0.0), 1.0, 0.0),
             Some(0.0)
         );
+    }
+
+    /// AR07 §III.A: during growth a collision reflects the normal relative velocity in the
+    /// frame of the growing surfaces, u' = 2σ̇ − u, at the predicted contact time.
+    #[test]
+    fn growth_collision_reflects_in_the_growing_frame() {
+        let s = vec![Vector2::new(0.4, 0.5), Vector2::new(0.6, 0.5)];
+        let v = vec![Vector2::new(1.0, 0.0), Vector2::new(-1.0, 0.0)];
+        let mut hs =
+            HardSpheres::<D2>::new(Vector2::new(10.0, 10.0), s, vec![0.5; 2], vec![1.0, 3.0], v)
+                .unwrap();
+        let g = 0.1;
+        let mut eng = Engine::new(&mut hs, 1.5, g);
+        assert_eq!(eng.run(&hs, f64::INFINITY, 1, 100), Halt::Collisions);
+        // |2 − 2τ| = 1 + 0.1 τ; u = −2, σ̇ = 0.1 → u' = 2.2.
+        assert!((eng.t - 1.0 / 2.1).abs() < 1e-15, "{}", eng.t);
+        let (vi, vj) = (eng.grains[0].v, eng.grains[1].v);
+        assert!((vj.x - vi.x - 2.2).abs() < 1e-14, "{vi} {vj}");
+        assert!((vi.x + 3.0 * vj.x - (1.0 - 3.0)).abs() < 1e-14);
+        assert_eq!((vi.y, vj.y), (0.0, 0.0));
+        assert!((eng.virial - 0.75 * 4.2 * (1.0 + g * eng.t)).abs() < 1e-13);
     }
 
     #[test]
