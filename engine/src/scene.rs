@@ -21,6 +21,10 @@ pub struct Scene {
     /// One line saying what the scene is and which paper section it follows.
     #[serde(default)]
     pub description: String,
+    /// The published state this scene reproduces (a key of golden/paper-values.toml, e.g.
+    /// `ar07-D-10kPa`); `grainbench reproduce` compares with it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub paper_state: Option<String>,
     /// 2 (disks) or 3 (spheres).
     pub dimension: usize,
     /// Seed of the random initial state.
