@@ -14,8 +14,16 @@
 //!   `z = z+ + z− + z0` (GRC07 T.VI: e.g. z = 2.004 = 0.12 + 0.12 + 1.76). Unstressed
 //!   contacts sit at the deflection h0 and may carry tangential force up to μF0 (GRC07 (11)).
 //!
-//! Force statistics (⟨N⟩, Z(α), X1, M1, M2) use the same set of contacts as `z`, so that
+//! Force statistics (⟨N⟩, Z(α), X1, M1, M2, P(f), the AR07 T.VI breakdown, the GRC07 Fig. 15
+//! angles: [`crate::force_distribution`]) use the same set of contacts as `z`, so that
 //! `z⟨N⟩ = (2/n) Σ N` enters the pressure relations consistently.
+//!
+//! # Geometry
+//!
+//! g(r) and z(h) ([`crate::structure`]), bond-orientational order ([`mod@crate::bond_order`], 3D)
+//! and the variant II of x_k with the rattlers fixed onto the backbone
+//! ([`crate::fixed_rattlers`]) are measured on the positions, in units of a = the largest
+//! diameter. [`Analysis::metric_values`] lists every scalar under a canonical key.
 //!
 //! # Pressure relations
 //!
@@ -28,7 +36,14 @@
 //! GRC07 (18) `⟨N⟩ = 7πaP/(9zΦ)` for disk diameters uniform in `[a/2, a]` (`⟨d⟩ = 3a/4`,
 //! `⟨d²⟩ = 7a²/12`).
 
+use crate::bond_order::{bond_order, BondOrder, DEFAULT_CUTOFF};
+use crate::fixed_rattlers::{fix_rattlers, FixedRattlers, DEFAULT_SEED};
+use crate::force_distribution::force_stats;
+pub use crate::force_distribution::{ForceStats, PopulationStats};
 use crate::rattlers::{find_rattlers, Rule};
+use crate::structure::{
+    default_gap_grid, gap_coordination, pair_correlation, unit_length, Structure,
+};
 use grainbench_engine::snapshot::{Contact, Snapshot};
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -45,6 +60,21 @@ pub struct Options {
     pub cohesive_tolerance: f64,
     /// Rattler rule; `None` picks [`Rule::for_snapshot`].
     pub rule: Option<Rule>,
+    /// Bin width of P(f), in f = N/⟨N⟩.
+    pub pdf_bin_width: f64,
+    /// Bin width of the force-angle histogram (GRC07 Fig. 15), degrees.
+    pub angle_bin_width: f64,
+    /// Bin width and range of g(r), in a (the range is clipped to half the cell).
+    pub gr_bin_width: f64,
+    pub gr_r_max: f64,
+    /// Largest h/a of z(h) (grid: 0, then 10 points per decade from 1e-5).
+    pub gap_h_max: f64,
+    /// Bond length d_c/a of the bond-orientational order (AR07 T.II: 1.35 or 1.40).
+    pub bond_cutoff: f64,
+    /// Fix the rattlers onto the backbone for x_k^II and z^II(h) (AR07 §III.C, variant II).
+    pub fix_rattlers: bool,
+    /// Seed of the random force directions on the rattlers (variant II).
+    pub seed: u64,
 }
 
 impl Default for Options {
@@ -53,6 +83,14 @@ impl Default for Options {
             force_tolerance: 1e-6,
             cohesive_tolerance: 1e-4,
             rule: None,
+            pdf_bin_width: 0.1,
+            angle_bin_width: 5.0,
+            gr_bin_width: 0.01,
+            gr_r_max: 5.0,
+            gap_h_max: 1.0,
+            bond_cutoff: DEFAULT_CUTOFF,
+            fix_rattlers: true,
+            seed: DEFAULT_SEED,
         }
     }
 }
@@ -96,12 +134,90 @@ pub struct Analysis {
     /// between rattlers ignored (AR07 T.I and T.V, variant I); `x_k[0]` = x0, Σ x_k = 1.
     /// At least [`X_K_MIN_LEN`] entries (k = 0..=12).
     pub x_k: Vec<f64>,
+    /// Variant II (AR07 T.I, T.V): rattlers fixed onto the backbone, x_k^II and z^II(0);
+    /// `None` if disabled or if there is no backbone to fix them onto.
+    pub fixed_rattlers: Option<FixedRattlers>,
     /// Cohesive snapshots: z+ / z− / z0 split and force levels (GRC07 T.VI).
     pub cohesive_split: Option<CohesiveSplit>,
-    /// Normal-force distribution and friction mobilisation (AR07 (27), T.IV, T.VI).
+    /// Normal-force distribution and friction mobilisation (AR07 (27), Figs. 4, 15, T.IV,
+    /// T.VI; GRC07 Fig. 15).
     pub forces: ForceStats,
+    /// g(r) and z(h) (AR07 §III.D).
+    pub structure: Structure,
+    /// Bond-orientational order and crystallinity (AR07 (31)–(34), T.II); 3D only.
+    pub bond_order: Option<BondOrder>,
     /// Measured pressure and the exact relations.
     pub pressure: Pressure,
+}
+
+impl Analysis {
+    /// Every scalar metric under its canonical key (fractions, not percent), for tables
+    /// comparing with the papers. Keys whose metric is undefined for this snapshot (Q6 in
+    /// 2D, z± without cohesion, N^(2) without divalent grains, …) are left out.
+    ///
+    /// `phi`, `z`, `z_star`, `x0`, `xk2`…`xk12` (x_k, variant I), `xk2_II`…`xk12_II`,
+    /// `mean_N`, `Z2`, `Z5_3`, `X1`, `M1`, `M2`, `N_2`, `X1_2`, `M1_2`, `M2_2`, `N_3`, `X1_3`,
+    /// `M1_3`, `M2_3`, `Q4`, `Q6`, `Q4loc`, `Q6loc`, `Z_bond`, `Z_cr`, `Q6loc_cr`, `x_cr`,
+    /// `n_cr`, `z_plus`, `z_minus`, `z_zero`, `pressure` (measured).
+    pub fn metric_values(&self) -> Vec<(String, f64)> {
+        let mut v: Vec<(String, f64)> = Vec::new();
+        let mut put = |k: &str, x: Option<f64>| {
+            if let Some(x) = x.filter(|x| x.is_finite()) {
+                v.push((k.to_string(), x));
+            }
+        };
+        put("phi", Some(self.packing_fraction));
+        put("z", Some(self.z));
+        put("z_star", self.z_backbone);
+        put("x0", Some(self.rattler_fraction));
+        for k in 2..=12 {
+            put(
+                &format!("xk{k}"),
+                Some(self.x_k.get(k).copied().unwrap_or(0.0)),
+            );
+        }
+        if let Some(f) = &self.fixed_rattlers {
+            for k in 2..=12 {
+                put(
+                    &format!("xk{k}_II"),
+                    Some(f.x_k.get(k).copied().unwrap_or(0.0)),
+                );
+            }
+        }
+        let f = &self.forces;
+        put("mean_N", f.mean_normal);
+        put("Z2", f.z2);
+        put("Z5_3", f.z5_3);
+        put("X1", f.x1);
+        put("M1", f.m1);
+        put("M2", f.m2);
+        for (k, pop) in [(2, &f.coordination_2), (3, &f.coordination_3)] {
+            if let Some(p) = pop {
+                put(&format!("N_{k}"), p.mean_normal_reduced);
+                put(&format!("X1_{k}"), Some(p.x1));
+                put(&format!("M1_{k}"), p.m1);
+                put(&format!("M2_{k}"), p.m2);
+            }
+        }
+        if let Some(b) = &self.bond_order {
+            put("Q4", b.q4_global);
+            put("Q6", b.q6_global);
+            put("Q4loc", b.q4_local);
+            put("Q6loc", b.q6_local);
+            put("Z_bond", Some(b.z_bond));
+            put("Z_cr", Some(b.z_cr));
+            put("Q6loc_cr", b.q6_local_cr);
+            put("x_cr", Some(b.x_cr));
+            put("n_cr", b.n_cr);
+        }
+        if let Some(s) = &self.cohesive_split {
+            put("z_plus", Some(s.z_plus));
+            put("z_minus", Some(s.z_minus));
+            put("z_zero", Some(s.z_zero));
+        }
+        put("pressure", self.pressure.measured);
+        v
+    }
 }
 
 /// GRC07 T.VI: interactions split by the sign of N (tolerance `cohesive_tolerance`).
@@ -120,22 +236,6 @@ pub struct CohesiveSplit {
     /// N− and N−^(2): mean and quadratic mean of |N| over attractive forces.
     pub mean_attractive: Option<f64>,
     pub rms_attractive: Option<f64>,
-}
-
-/// Normal-force statistics over the N_c counted contacts.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ForceStats {
-    /// ⟨N⟩.
-    pub mean_normal: Option<f64>,
-    /// Z(2) = ⟨N²⟩/⟨N⟩² (AR07 (27), T.IV).
-    pub z2: Option<f64>,
-    /// Z(5/3) (AR07 (27)–(28)); only when no N is negative.
-    pub z5_3: Option<f64>,
-    /// X1: fraction of contacts with N > ⟨N⟩ (AR07 T.VI).
-    pub x1: Option<f64>,
-    /// M1, M2: mean |T|/N over contacts with N > ⟨N⟩, resp. 0 < N < ⟨N⟩ (AR07 T.VI).
-    pub m1: Option<f64>,
-    pub m2: Option<f64>,
 }
 
 /// Measured pressure and the exact or approximate relations that predict it.
@@ -219,11 +319,6 @@ fn norm(v: &[f64]) -> f64 {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// `|T|/N` (M1, M2 of AR07 T.VI).
-fn mobilisation(c: &Contact) -> f64 {
-    norm(&c.tangential) / c.normal
 }
 
 /// Virial pressure of a set of contacts, split into normal and tangential parts:
@@ -319,50 +414,79 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         }
     });
 
-    // Force statistics, AR07 (27) and T.VI.
-    let mean_n = mean(backbone.iter().map(|c| c.normal));
-    let forces = match mean_n {
-        None => ForceStats {
-            mean_normal: None,
-            z2: None,
-            z5_3: None,
-            x1: None,
-            m1: None,
-            m2: None,
+    // Force statistics, AR07 (27), T.VI; GRC07 Fig. 15.
+    let a = unit_length(&snap.particles.radius);
+    let pressure_scale = match (snap.pressure_target, a) {
+        (Some(p), Some(a)) => Some(p * a.powi(d as i32 - 1)),
+        _ => None,
+    };
+    // P(f) in units of ⟨N⟩, or of F0 for cohesive packings (GRC07 Fig. 9).
+    let pdf_unit = snap.cohesive.then_some(1.0);
+    let forces = force_stats(
+        &backbone,
+        &k_of,
+        pressure_scale,
+        pdf_unit,
+        opts.pdf_bin_width,
+        opts.angle_bin_width,
+    );
+    let mean_n = forces.mean_normal;
+
+    // Geometry: variant II, g(r), z(h), bond order.
+    let lengths = &snap.cell.lengths;
+    let position = &snap.particles.position;
+    let radius = &snap.particles.radius;
+    let kept: Vec<(usize, usize)> = pairs
+        .iter()
+        .zip(&r.kept)
+        .filter(|(_, &k)| k)
+        .map(|(p, _)| *p)
+        .collect();
+    let fixed = if opts.fix_rattlers {
+        fix_rattlers(lengths, position, radius, &r.is_rattler, &kept, opts.seed)
+    } else {
+        None
+    };
+    let structure = match a {
+        None => Structure {
+            unit: None,
+            pair_correlation: None,
+            gap_coordination_i: None,
+            gap_coordination_ii: None,
+            gap_coordination_iii: None,
         },
-        Some(m) => {
-            let moment = |alpha: f64| {
-                mean(backbone.iter().map(|c| c.normal.powf(alpha)))
-                    .map(|v| v / m.powf(alpha))
-                    .filter(|v| v.is_finite())
-            };
-            let z2 = mean(backbone.iter().map(|c| c.normal * c.normal))
-                .map(|v| v / (m * m))
-                .filter(|v| v.is_finite());
-            let z5_3 = if backbone.iter().all(|c| c.normal >= 0.0) {
-                moment(5.0 / 3.0)
-            } else {
-                None
-            };
-            let strong = backbone.iter().filter(|c| c.normal > m);
-            let x1 = strong.clone().count() as f64 / backbone.len() as f64;
-            let m1 = mean(strong.filter(|c| c.normal > 0.0).map(|c| mobilisation(c)));
-            let m2 = mean(
-                backbone
-                    .iter()
-                    .filter(|c| c.normal < m && c.normal > 0.0)
-                    .map(|c| mobilisation(c)),
-            );
-            ForceStats {
-                mean_normal: Some(m),
-                z2,
-                z5_3,
-                x1: Some(x1),
-                m1,
-                m2,
+        Some(a) => {
+            let grid = default_gap_grid(opts.gap_h_max);
+            let backbone_grains: Vec<bool> = r.is_rattler.iter().map(|&x| !x).collect();
+            let z_ii = fixed.as_ref().and_then(|(_, relaxed)| {
+                let moved: Vec<Vec<f64>> =
+                    relaxed.position.iter().map(|p| p[..d].to_vec()).collect();
+                gap_coordination(lengths, &moved, radius, None, a, &grid)
+            });
+            Structure {
+                unit: Some(a),
+                pair_correlation: pair_correlation(
+                    lengths,
+                    position,
+                    a,
+                    opts.gr_bin_width,
+                    opts.gr_r_max,
+                ),
+                gap_coordination_i: gap_coordination(lengths, position, radius, None, a, &grid),
+                gap_coordination_ii: z_ii,
+                gap_coordination_iii: gap_coordination(
+                    lengths,
+                    position,
+                    radius,
+                    Some(&backbone_grains),
+                    a,
+                    &grid,
+                ),
             }
         }
     };
+    let bond_order = a.and_then(|a| bond_order(lengths, position, a, opts.bond_cutoff));
+    let fixed_rattlers = fixed.map(|(f, _)| f);
 
     // Pressures.
     let measured = trace_over_d(&snap.cell.contact_stress, d);
@@ -453,8 +577,11 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         z_backbone,
         rattler_sweeps: r.sweeps,
         x_k,
+        fixed_rattlers,
         cohesive_split,
         forces,
+        structure,
+        bond_order,
         pressure: Pressure {
             measured,
             kinetic,
@@ -853,6 +980,303 @@ mod tests {
         assert_eq!(json["rule"]["kind"], "frictional");
         assert_eq!(json["x_k"][4], 1.0);
         assert_eq!(json["cohesive_split"], serde_json::Value::Null);
+        // The series are in the JSON, the markdown has their summaries.
+        assert!(json["forces"]["pdf"]["x"].is_array());
+        assert!(json["structure"]["pair_correlation"]["y"].is_array());
+        assert!(json["structure"]["gap_coordination_iii"]["x"].is_array());
+        assert_eq!(json["bond_order"], serde_json::Value::Null, "2D");
+        assert!(md.contains("| z^III(h) | 4.00000 |"), "{md}");
+        assert!(md.contains("| x_4^II | 100.000% |"), "{md}");
+        assert!(!md.contains("| Q6 |"), "{md}");
+    }
+
+    /// Every key [`Analysis::metric_values`] may return, as listed in its documentation.
+    fn canonical_keys() -> Vec<String> {
+        let mut k: Vec<String> = ["phi", "z", "z_star", "x0"].map(String::from).to_vec();
+        k.extend((2..=12).map(|i| format!("xk{i}")));
+        k.extend((2..=12).map(|i| format!("xk{i}_II")));
+        k.extend(
+            [
+                "mean_N", "Z2", "Z5_3", "X1", "M1", "M2", "N_2", "X1_2", "M1_2", "M2_2", "N_3",
+                "X1_3", "M1_3", "M2_3", "Q4", "Q6", "Q4loc", "Q6loc", "Z_bond", "Z_cr", "Q6loc_cr",
+                "x_cr", "n_cr", "z_plus", "z_minus", "z_zero", "pressure",
+            ]
+            .map(String::from),
+        );
+        k
+    }
+
+    fn value(v: &[(String, f64)], key: &str) -> Option<f64> {
+        v.iter().find(|(k, _)| k == key).map(|(_, x)| *x)
+    }
+
+    /// A tangential force of magnitude `t` perpendicular to `branch` (3D).
+    fn perpendicular(branch: &[f64], t: f64) -> Vec<f64> {
+        let e = if branch[0].abs() < 0.9 * norm(branch) {
+            [1.0, 0.0, 0.0]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
+        let c = [
+            branch[1] * e[2] - branch[2] * e[1],
+            branch[2] * e[0] - branch[0] * e[2],
+            branch[0] * e[1] - branch[1] * e[0],
+        ];
+        let l = norm(&c);
+        c.iter().map(|x| t * x / l).collect()
+    }
+
+    /// Cohesive FCC packing (3×3×3 cells, nearest neighbours at 1, radius 0.49, every nearest
+    /// pair listed with N = 1 or −0.2) plus two small grains in octahedral holes, one with 2
+    /// interactions (N = 2 with |T| = 0.5, N = 0.1 with |T| = 0.02), one with 3 (N = 2, 0.1,
+    /// 0.1, same |T|): every key but Z(5/3) is defined. P = 2.
+    fn fcc_cohesive() -> Snapshot {
+        let c = 2f64.sqrt();
+        let basis = [
+            [0.0, 0.0, 0.0],
+            [0.5, 0.5, 0.0],
+            [0.5, 0.0, 0.5],
+            [0.0, 0.5, 0.5],
+        ];
+        let mut p: Vec<Vec<f64>> = Vec::new();
+        for x in 0..3 {
+            for y in 0..3 {
+                for z in 0..3 {
+                    for b in &basis {
+                        let q = [x as f64 + b[0], y as f64 + b[1], z as f64 + b[2]];
+                        p.push(q.iter().map(|v| v * c).collect());
+                    }
+                }
+            }
+        }
+        let l = vec![3.0 * c; 3];
+        let mut bonds = Vec::new();
+        for i in 0..p.len() {
+            for j in i + 1..p.len() {
+                if norm(&crate::fixtures::branch(&l, &p[i], &p[j])) < 1.01 {
+                    let n = if bonds.len() % 2 == 0 { 1.0 } else { -0.2 };
+                    bonds.push(bond(i, j, n));
+                }
+            }
+        }
+        assert_eq!(bonds.len(), 6 * 108);
+        let mut r = vec![0.49; p.len()];
+        for (g, centre, forces) in [
+            (108, [0.5, 0.5, 0.5], &[2.0, 0.1][..]),
+            (109, [1.5, 0.5, 0.5], &[2.0, 0.1, 0.1][..]),
+        ] {
+            p.push(centre.iter().map(|v| v * c).collect());
+            r.push(0.2);
+            let near: Vec<usize> = (0..108)
+                .filter(|&h| norm(&crate::fixtures::branch(&l, &p[g], &p[h])) < 0.75)
+                .collect();
+            assert_eq!(near.len(), 6);
+            for (&h, &n) in near.iter().zip(forces) {
+                let br = crate::fixtures::branch(&l, &p[g], &p[h]);
+                let t = if n > 1.0 { 0.5 } else { 0.02 };
+                bonds.push(Bond {
+                    i: g,
+                    j: h,
+                    normal: n,
+                    tangential: perpendicular(&br, t),
+                });
+            }
+        }
+        let mut snap = snapshot(l, r, p, &bonds, true, Some(0.5));
+        snap.pressure_target = Some(2.0);
+        snap
+    }
+
+    /// Simple cubic frictional lattice (4³, touching, μ = 0.3) with varied normal forces and
+    /// tangential forces on a quarter of the bonds.
+    fn cubic_frictional() -> Snapshot {
+        let (l, r, p, mut b) = lattice(3, 4, 1.0, 0.5, 1.0);
+        let pos = p.clone();
+        for (k, bd) in b.iter_mut().enumerate() {
+            bd.normal = 0.5 + (k % 3) as f64;
+            if k % 4 == 0 {
+                let br = crate::fixtures::branch(&l, &pos[bd.i], &pos[bd.j]);
+                bd.tangential = perpendicular(&br, 0.1);
+            }
+        }
+        snapshot(l, r, p, &b, false, Some(0.3))
+    }
+
+    /// `metric_values` uses exactly the canonical keys: the union over a cohesive FCC packing
+    /// and a cohesionless frictional lattice is the whole list, with no other key.
+    #[test]
+    fn metric_values_use_the_canonical_keys() {
+        let a = analyze(&fcc_cohesive(), &Options::default());
+        let b = analyze(&cubic_frictional(), &Options::default());
+        let canon = canonical_keys();
+        let mut union: Vec<String> = Vec::new();
+        for v in [a.metric_values(), b.metric_values()] {
+            for (k, x) in v {
+                assert!(canon.contains(&k), "unknown key {k}");
+                assert!(x.is_finite());
+                if !union.contains(&k) {
+                    union.push(k);
+                }
+            }
+        }
+        let mut missing: Vec<&String> = canon.iter().filter(|k| !union.contains(k)).collect();
+        missing.sort();
+        assert!(missing.is_empty(), "never returned: {missing:?}");
+        // Cohesive: Z(5/3) undefined (negative forces), z± present.
+        let va = a.metric_values();
+        assert!(value(&va, "Z5_3").is_none());
+        assert!(value(&va, "z_plus").is_some());
+        // Values are the fields, as fractions.
+        let vb = b.metric_values();
+        assert_eq!(value(&vb, "z"), Some(6.0));
+        assert_eq!(value(&vb, "xk6"), Some(1.0));
+        assert_eq!(value(&vb, "xk6_II"), Some(1.0));
+        assert_eq!(value(&vb, "x0"), Some(0.0));
+        assert_eq!(value(&vb, "Z_bond"), Some(6.0));
+        assert!((value(&vb, "Q6").unwrap() - 0.3536).abs() < 5e-5);
+        assert_eq!(value(&vb, "x_cr"), Some(0.0));
+        assert!(
+            value(&vb, "n_cr").is_none(),
+            "no crystalline grain in a simple cubic lattice"
+        );
+        assert_eq!(value(&vb, "pressure"), b.pressure.measured);
+        assert_eq!(value(&vb, "Z5_3"), b.forces.z5_3);
+        assert!(value(&vb, "z_plus").is_none(), "cohesionless");
+        // 2D: no bond order.
+        let (l, r, p, bd) = lattice(2, 4, 0.99, 0.5, 1.0);
+        let v2 = analyze(
+            &snapshot(l, r, p, &bd, false, Some(0.5)),
+            &Options::default(),
+        )
+        .metric_values();
+        assert!(value(&v2, "Q6").is_none() && value(&v2, "z").is_some());
+    }
+
+    /// AR07 T.VI through `analyze`: N^(k) is the mean force of the population over P a²,
+    /// with P the snapshot's pressure target and a its largest diameter (0.98 here).
+    #[test]
+    fn t6_populations_in_analysis() {
+        let a = analyze(&fcc_cohesive(), &Options::default());
+        let v = a.metric_values();
+        let pa2 = 2.0 * 0.98 * 0.98;
+        assert!((value(&v, "N_2").unwrap() - 1.05 / pa2).abs() < 1e-12);
+        assert!((value(&v, "N_3").unwrap() - 2.2 / 3.0 / pa2).abs() < 1e-12);
+        assert_eq!(value(&v, "X1_2"), Some(0.5));
+        assert!((value(&v, "X1_3").unwrap() - 1.0 / 3.0).abs() < 1e-15);
+        for key in ["M1_2", "M1_3"] {
+            assert!((value(&v, key).unwrap() - 0.25).abs() < 1e-12, "{key}");
+        }
+        for key in ["M2_2", "M2_3"] {
+            assert!((value(&v, key).unwrap() - 0.2).abs() < 1e-12, "{key}");
+        }
+        // Cohesive P(f) is in units of F0 (GRC07 Fig. 9): bins below 0 for tensile forces.
+        assert_eq!(a.forces.pdf_unit, Some(1.0));
+        assert!(a.forces.pdf.as_ref().unwrap().x[0] < 0.0);
+        // FCC bond order survives the two interstitials: most grains crystalline.
+        let b = a.bond_order.as_ref().unwrap();
+        assert!(b.x_cr > 0.8 && b.n_cr.is_some(), "{b:?}");
+    }
+
+    /// Variant II through `analyze`: a caged rattler (perturbed cubic lattice, radius 0.3 in
+    /// a cell centre) ends on 3 contacts, x_k^II and z^II(h = 0) follow; z^III(0) = z*.
+    #[test]
+    fn fixed_rattlers_in_analysis() {
+        let (l, mut r, mut p, b) = lattice(3, 4, 1.0, 0.5, 1.0);
+        let mut rng = Lcg(21);
+        for q in p.iter_mut() {
+            q.iter_mut().for_each(|x| *x += 0.03 * (rng.next() - 0.5));
+        }
+        r.push(0.3);
+        p.push(vec![0.5; 3]);
+        let a = analyze(
+            &snapshot(l, r, p, &b, false, Some(0.3)),
+            &Options::default(),
+        );
+        assert_eq!(a.rattlers, 1);
+        let f = a.fixed_rattlers.as_ref().unwrap();
+        assert_eq!((f.rattlers, f.rattler_contacts, f.unsettled), (1, 3, 0));
+        let v = a.metric_values();
+        assert!((value(&v, "xk3_II").unwrap() - 1.0 / 65.0).abs() < 1e-15);
+        assert!((value(&v, "xk7_II").unwrap() - 3.0 / 65.0).abs() < 1e-15);
+        assert!((value(&v, "xk6_II").unwrap() - 61.0 / 65.0).abs() < 1e-15);
+        assert_eq!(value(&v, "xk3"), Some(0.0));
+        let z2 = a.structure.gap_coordination_ii.as_ref().unwrap();
+        assert_eq!(z2.x[0], 0.0);
+        // The perturbed lattice bonds are listed but not all overlap: z^II(0) counts the
+        // geometric overlaps only, ≤ z_geometric.
+        assert!(z2.y[0] <= f.z_geometric);
+        let z3 = a.structure.gap_coordination_iii.as_ref().unwrap();
+        let zi = a.structure.gap_coordination_i.as_ref().unwrap();
+        assert!(z3.y.iter().zip(&z3.x).all(|(y, _)| y.is_finite()));
+        assert!(
+            zi.y.windows(2).all(|w| w[0] <= w[1]),
+            "z(h) is non-decreasing"
+        );
+        // Without the relaxation: no variant II.
+        let opts = Options {
+            fix_rattlers: false,
+            ..Options::default()
+        };
+        let (l, r, p, b) = lattice(3, 4, 1.0, 0.5, 1.0);
+        let a = analyze(&snapshot(l, r, p, &b, false, Some(0.3)), &opts);
+        assert!(a.fixed_rattlers.is_none() && a.structure.gap_coordination_ii.is_none());
+        assert!(value(&a.metric_values(), "xk6_II").is_none());
+        // Touching lattice: z^III(0) = z* = 6.
+        assert_eq!(a.structure.gap_coordination_iii.as_ref().unwrap().y[0], 6.0);
+    }
+
+    /// Foreign snapshots that are odd but pass `Snapshot::check` never panic: no contacts
+    /// (every grain a rattler), zero radii, a degenerate cell, non-finite positions.
+    #[test]
+    fn odd_snapshots_do_not_panic() {
+        let mut rng = Lcg(2);
+        let p: Vec<Vec<f64>> = (0..200)
+            .map(|_| (0..3).map(|_| 6.0 * rng.next()).collect())
+            .collect();
+        let gas = snapshot(
+            vec![6.0; 3],
+            vec![0.3; 200],
+            p.clone(),
+            &[],
+            false,
+            Some(0.3),
+        );
+        let a = analyze(&gas, &Options::default());
+        assert_eq!(a.rattlers, 200);
+        assert!(
+            a.fixed_rattlers.is_none(),
+            "nothing to fix the rattlers onto"
+        );
+        assert!(a.structure.pair_correlation.is_some() && a.bond_order.is_some());
+        assert!(a.forces.pdf.is_none() && a.forces.angles.is_none());
+        let v = a.metric_values();
+        assert!(value(&v, "xk2_II").is_none() && value(&v, "mean_N").is_none());
+        let _ = crate::report::to_markdown(&a);
+
+        let zero = snapshot(
+            vec![6.0; 3],
+            vec![0.0; 200],
+            p.clone(),
+            &[],
+            false,
+            Some(0.3),
+        );
+        let a = analyze(&zero, &Options::default());
+        assert!(a.structure.unit.is_none() && a.bond_order.is_none());
+        let _ = crate::report::to_json(&a);
+
+        let mut bad = gas.clone();
+        bad.cell.lengths = vec![6.0, 0.0, -1.0];
+        bad.particles.position[3] = vec![f64::NAN, 0.0, f64::INFINITY];
+        let a = analyze(&bad, &Options::default());
+        assert!(a.structure.pair_correlation.is_none() && a.bond_order.is_none());
+        let _ = crate::report::to_markdown(&a);
+
+        let mut nan = gas;
+        nan.particles.position[3] = vec![f64::NAN, 0.0, f64::INFINITY];
+        nan.particles.radius[5] = f64::NAN;
+        let a = analyze(&nan, &Options::default());
+        let _ = (crate::report::to_markdown(&a), a.metric_values());
     }
 }
 

@@ -30,6 +30,17 @@ fn pct(x: f64) -> String {
     format!("{}%", fmt_num(100.0 * x))
 }
 
+/// Abscissa of the largest ordinate (first one on ties).
+fn mode(x: &[f64], y: &[f64]) -> f64 {
+    let mut best = 0;
+    for k in 1..y.len().min(x.len()) {
+        if y[k] > y[best] {
+            best = k;
+        }
+    }
+    x.get(best).copied().unwrap_or(f64::NAN)
+}
+
 /// Markdown rendering: a title line and one table `metric | value | note`.
 pub fn to_markdown(a: &Analysis) -> String {
     let mut rows: Vec<(String, String, String)> = Vec::new();
@@ -99,6 +110,26 @@ pub fn to_markdown(a: &Analysis) -> String {
             );
         }
     }
+    if let Some(f) = &a.fixed_rattlers {
+        row(
+            "z^II(0)",
+            fmt_num(f.z_geometric),
+            &format!(
+                "rattlers fixed onto the backbone (AR07 §III.C, II): {} moved, {} contacts with \
+                 rattlers ({} between rattlers), {} unsettled",
+                f.rattlers, f.rattler_contacts, f.rattler_rattler_contacts, f.unsettled
+            ),
+        );
+        for (k, &x) in f.x_k.iter().enumerate() {
+            if x > 0.0 {
+                row(
+                    &format!("x_{k}^II"),
+                    pct(x),
+                    "grains with k geometric contacts (AR07 T.V, II)",
+                );
+            }
+        }
+    }
     if let Some(s) = &a.cohesive_split {
         row("z+", fmt_num(s.z_plus), "repulsive (GRC07 T.VI)");
         row("z−", fmt_num(s.z_minus), "attractive");
@@ -116,6 +147,113 @@ pub fn to_markdown(a: &Analysis) -> String {
     row("X1", opt(f.x1), "fraction with N > ⟨N⟩ (AR07 T.VI)");
     row("M1", opt(f.m1), "⟨|T|/N⟩, N > ⟨N⟩");
     row("M2", opt(f.m2), "⟨|T|/N⟩, N < ⟨N⟩");
+    for (k, pop) in [(2, &f.coordination_2), (3, &f.coordination_3)] {
+        if let Some(p) = pop {
+            row(
+                &format!("N^({k})"),
+                opt(p.mean_normal_reduced),
+                &format!(
+                    "mean N / (P a^(d−1)) on the {} contacts of {k}-coordinated grains (AR07 T.VI)",
+                    p.contacts
+                ),
+            );
+            row(&format!("X1^({k})"), fmt_num(p.x1), "fraction with N > ⟨N⟩");
+            row(&format!("M1^({k})"), opt(p.m1), "⟨|T|/N⟩, N > ⟨N⟩");
+            row(&format!("M2^({k})"), opt(p.m2), "⟨|T|/N⟩, N < ⟨N⟩");
+        }
+    }
+    if let Some(h) = &f.pdf {
+        row(
+            "P(f)",
+            format!("{} bins", h.x.len()),
+            &format!(
+                "f = N/{}, width {}, mode at f = {} (series in JSON: forces.pdf)",
+                if a.cohesive { "F0" } else { "⟨N⟩" },
+                fmt_num(h.bin_width),
+                fmt_num(mode(&h.x, &h.y))
+            ),
+        );
+    }
+    if let Some(h) = &f.angles {
+        row(
+            "force angle θ",
+            format!("{} bins", h.x.len()),
+            &format!(
+                "angle between n and F (GRC07 Fig. 15), mode at {}° (series in JSON: forces.angles)",
+                fmt_num(mode(&h.x, &h.y))
+            ),
+        );
+    }
+    let st = &a.structure;
+    if let Some(g) = &st.pair_correlation {
+        row(
+            "g(r)",
+            format!("{} bins", g.x.len()),
+            &format!(
+                "peak g = {} at r/a = {} (series in JSON: structure.pair_correlation)",
+                fmt_num(g.y.iter().copied().fold(0.0, f64::max)),
+                fmt_num(mode(&g.x, &g.y))
+            ),
+        );
+    }
+    for (name, z) in [
+        ("z^I", &st.gap_coordination_i),
+        ("z^II", &st.gap_coordination_ii),
+        ("z^III", &st.gap_coordination_iii),
+    ] {
+        if let Some(z) = z {
+            let at = |h: f64| {
+                z.x.iter()
+                    .position(|&x| x >= h * (1.0 - 1e-9))
+                    .map(|k| fmt_num(z.y[k]))
+                    .unwrap_or_else(|| "n/a".into())
+            };
+            row(
+                &format!("{name}(h)"),
+                at(0.0),
+                &format!(
+                    "at h = 0; {} at h = 0.01a, {} at h = 0.1a (AR07 §III.D, series in JSON)",
+                    at(0.01),
+                    at(0.1)
+                ),
+            );
+        }
+    }
+    if let Some(b) = &a.bond_order {
+        let dc = format!("d_c = {}a", fmt_num(b.cutoff));
+        row(
+            "Z (bonds)",
+            fmt_num(b.z_bond),
+            &format!("{dc}, {} bonds (AR07 T.II)", b.bonds),
+        );
+        row("Q6", opt(b.q6_global), "global, over all bonds");
+        row("Q4", opt(b.q4_global), "global, over all bonds");
+        row("Q6^loc", opt(b.q6_local), "mean of AR07 (31)");
+        row("Q4^loc", opt(b.q4_local), "mean of AR07 (31)");
+        row(
+            "Z_cr",
+            fmt_num(b.z_cr),
+            &format!("{} crystalline bonds, AR07 (34)", b.crystalline_bonds),
+        );
+        row(
+            "x_cr",
+            fmt_num(b.x_cr),
+            &format!("{} grains with ≥ 7 crystalline bonds", b.crystalline_grains),
+        );
+        row(
+            "Q6^loc,cr",
+            opt(b.q6_local_cr),
+            "mean Q6^loc of crystalline grains",
+        );
+        row(
+            "⟨n_cr⟩",
+            opt(b.n_cr),
+            &format!(
+                "mass-average cluster size ({} clusters, largest {})",
+                b.clusters, b.largest_cluster
+            ),
+        );
+    }
     let p = &a.pressure;
     row("P measured", opt(p.measured), "tr σ_contact / d");
     row("P kinetic", opt(p.kinetic), "tr σ_kinetic / d");
