@@ -114,7 +114,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         .iter()
         .map(|r| analyze(&r.snapshot, &Default::default()))
         .collect();
-    let values: Vec<Vec<(String, f64)>> = analyses.iter().map(metric_values).collect();
+    let values: Vec<Vec<(String, f64)>> = analyses.iter().map(|a| a.metric_values()).collect();
     let table = reproduction::build(&state_key, &values)
         .with_context(|| format!("building the table of {state_key}"))?;
     std::fs::create_dir_all(&out)?;
@@ -172,8 +172,11 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
 fn write_plots(out: &Path, runs: &[SeedRun], analyses: &[Analysis]) -> Vec<PathBuf> {
     let mut written = Vec::new();
     let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
-    let pf: Vec<Vec<(f64, f64)>> = analyses.iter().map(pf_points).collect();
-    let gr: Vec<Vec<(f64, f64)>> = runs.iter().map(|r| gr_points(&r.snapshot)).collect();
+    let pf: Vec<Vec<(f64, f64)>> = analyses.iter().map(|a| points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y)))).collect();
+    let gr: Vec<Vec<(f64, f64)>> = analyses
+        .iter()
+        .map(|a| points(a.structure.pair_correlation.as_ref().map(|g| (&g.x, &g.y))))
+        .collect();
     let frictionless_spheres = analyses
         .first()
         .is_some_and(|a| a.dimension == 3 && a.mu == Some(0.0));
@@ -230,21 +233,8 @@ fn record(
     Ok(path)
 }
 
-// TEMPORARY shims until the metrics branch lands.
-fn metric_values(a: &Analysis) -> Vec<(String, f64)> {
-    let mut v = vec![
-        ("phi".to_string(), a.packing_fraction),
-        ("z".to_string(), a.z),
-        ("x0".to_string(), a.rattler_fraction),
-    ];
-    if let Some(z) = a.z_backbone {
-        v.push(("z_star".into(), z));
-    }
-    v
-}
-fn pf_points(_a: &Analysis) -> Vec<(f64, f64)> {
-    Vec::new()
-}
-fn gr_points(_s: &Snapshot) -> Vec<(f64, f64)> {
-    Vec::new()
+
+fn points(xy: Option<(&Vec<f64>, &Vec<f64>)>) -> Vec<(f64, f64)> {
+    xy.map(|(x, y)| x.iter().copied().zip(y.iter().copied()).collect())
+        .unwrap_or_default()
 }
