@@ -83,6 +83,10 @@ enum Command {
         /// Also write golden/<scene>/rust.json (command, seeds, wall times, metrics).
         #[arg(long)]
         record: bool,
+        /// Cap the time limit of every stage (reduced time units): bounds the cost of a run
+        /// whose criteria are slow to meet; such stages end at `time-limit` and say so.
+        #[arg(long, value_name = "T")]
+        max_time: Option<f64>,
         #[arg(long, short = 'j')]
         threads: Option<usize>,
         #[arg(long, short)]
@@ -148,6 +152,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             ci,
             out,
             record,
+            max_time,
             threads,
             quiet,
             checkpoint_every,
@@ -160,6 +165,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 ci,
                 out,
                 record,
+                max_time,
                 flags: RunFlags {
                     quiet,
                     resume: false,
@@ -183,7 +189,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
 /// Loads a scene from a file, or an embedded one by name.
 pub(crate) fn load_scene(spec: &str) -> Result<Scene> {
     let path = Path::new(spec);
-    if path.exists() {
+    if path.is_file() || (path.exists() && library::scene_text(spec).is_none()) {
         return Ok(Scene::from_file(path)?);
     }
     if let Some(text) = library::scene_text(spec) {
@@ -221,7 +227,11 @@ pub(crate) const CHECKPOINT: &str = "checkpoint.bin";
 
 /// The scene and output directory of `run`: with `--resume` the scene may come from the
 /// checkpoint of the output directory.
-fn scene_and_out(spec: Option<&str>, out: Option<PathBuf>, resume: bool) -> Result<(Scene, PathBuf)> {
+fn scene_and_out(
+    spec: Option<&str>,
+    out: Option<PathBuf>,
+    resume: bool,
+) -> Result<(Scene, PathBuf)> {
     match (spec, &out, resume) {
         (None, Some(dir), true) => {
             let cp = Checkpoint::read(&dir.join(CHECKPOINT)).map_err(anyhow::Error::msg)?;

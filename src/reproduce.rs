@@ -2,7 +2,7 @@
 //! (checkpointed, resumable), measures every metric with the same code as `analyze`, and
 //! writes the table against the published values (golden/paper-values.toml) and the plots.
 
-use crate::{load_scene, run, RunFlags};
+use crate::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::metrics::{analyze, Analysis};
 use grainbench_comparisons::{paper, plots, reproduction};
@@ -16,6 +16,7 @@ pub struct Args {
     pub ci: bool,
     pub out: Option<PathBuf>,
     pub record: bool,
+    pub max_time: Option<f64>,
     pub flags: RunFlags,
 }
 
@@ -41,10 +42,7 @@ fn states_of(paper: &str) -> Vec<String> {
 pub fn reproduce(a: &Args) -> Result<i32> {
     let paper = a.paper.to_lowercase();
     if !["ar07", "grc07", "grc08"].contains(&paper.as_str()) {
-        bail!(
-            "unknown paper {:?}: expected ar07, grc07 or grc08",
-            a.paper
-        );
+        bail!("unknown paper {:?}: expected ar07, grc07 or grc08", a.paper);
     }
     let state_key = format!("{paper}-{}", a.state);
     let scene_name = if a.ci {
@@ -67,7 +65,16 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     if a.seeds.is_empty() {
         bail!("--seeds needs at least one seed");
     }
-    let base = load_scene(&scene_name)?;
+    let mut base = grainbench_engine::Scene::from_toml(
+        library::scene_text(&scene_name).expect("checked above"),
+        Path::new(&format!("<embedded:{scene_name}>")),
+    )?;
+    if let Some(t) = a.max_time {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--max-time must be a positive number of reduced time units, got {t}");
+        }
+        base.cap_max_time(t);
+    }
     // A scene may reproduce another published row (the CI variant of D runs at 10 kPa).
     let state_key = base.paper_state.clone().unwrap_or(state_key);
     let out = a
@@ -172,7 +179,10 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
 fn write_plots(out: &Path, runs: &[SeedRun], analyses: &[Analysis]) -> Vec<PathBuf> {
     let mut written = Vec::new();
     let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
-    let pf: Vec<Vec<(f64, f64)>> = analyses.iter().map(|a| points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y)))).collect();
+    let pf: Vec<Vec<(f64, f64)>> = analyses
+        .iter()
+        .map(|a| points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y))))
+        .collect();
     let gr: Vec<Vec<(f64, f64)>> = analyses
         .iter()
         .map(|a| points(a.structure.pair_correlation.as_ref().map(|g| (&g.x, &g.y))))
@@ -215,8 +225,10 @@ fn record(
         "paper_state": state_key,
         "paper_description": paper::paper_values(state_key).map(|s| s.description.clone()),
         "command": format!(
-            "grainbench reproduce {} --state {}{} --seeds {} -j {}",
-            a.paper, a.state, if a.ci { " --ci" } else { "" }, seeds.join(","), rayon::current_num_threads()
+            "grainbench reproduce {} --state {}{} --seeds {}{} -j {}",
+            a.paper, a.state, if a.ci { " --ci" } else { "" }, seeds.join(","),
+            a.max_time.map(|t| format!(" --max-time {t}")).unwrap_or_default(),
+            rayon::current_num_threads()
         ),
         "threads": rayon::current_num_threads(),
         "n": runs.first().map(|r| r.snapshot.particles.radius.len()),
@@ -232,7 +244,6 @@ fn record(
     snapshot::write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     Ok(path)
 }
-
 
 fn points(xy: Option<(&Vec<f64>, &Vec<f64>)>) -> Vec<(f64, f64)> {
     xy.map(|(x, y)| x.iter().copied().zip(y.iter().copied()).collect())

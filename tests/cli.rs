@@ -325,9 +325,15 @@ fn interrupted_runs_resume_bit_identical() {
         .success();
     let straight = std::fs::read_to_string(dir.path().join("straight/final.snap.json")).unwrap();
     // Killed (no chance to clean up): resumes from the last periodic checkpoint.
-    assert_eq!(interrupted_then_resumed(dir.path(), &scene, "-KILL"), straight);
+    assert_eq!(
+        interrupted_then_resumed(dir.path(), &scene, "-KILL"),
+        straight
+    );
     // Ctrl-C: stops at the next check, writes its state and a checkpoint, exit 130.
-    assert_eq!(interrupted_then_resumed(dir.path(), &scene, "-INT"), straight);
+    assert_eq!(
+        interrupted_then_resumed(dir.path(), &scene, "-INT"),
+        straight
+    );
     // Nothing to resume: a clear error.
     grainbench()
         .args(["run", "--resume", "-o"])

@@ -3,13 +3,13 @@
 //! criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), blow-up detection and snapshots.
 
 use crate::cell::{Cell, Control};
+use crate::checkpoint::{self, Checkpoint, Header};
 use crate::contact::hertz_mindlin::HertzMindlin;
 use crate::contact::linear::{Adhesion, Cohesion, Linear, NoCohesion};
 use crate::contact::slider::{Coulomb, Friction, Frictionless, NoRolling, NoSlip, RollingSpring};
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, Linear as _, D2, D3};
 use crate::init::{maxwell_velocities, random_gas};
-use crate::checkpoint::{self, Checkpoint, Header};
 use crate::protocols::event_driven::HardSpheres;
 use crate::protocols::lattice;
 use crate::scene::{Arrangement, Criteria, ForceScale, Law, Mu, Scene, Step};
@@ -213,6 +213,7 @@ pub struct Grains<D: Dim> {
     serialize = "H: serde::Serialize",
     deserialize = "H: serde::de::DeserializeOwned"
 ))]
+#[allow(clippy::large_enum_variant)] // one per checkpoint write, short-lived
 enum Payload<D: Dim, H> {
     AtStart(Grains<D>),
     Inside(State<D, H>),
@@ -357,7 +358,9 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
                 {
                     Payload::AtStart(g) => ctx.grains = g,
                     Payload::Inside(_) => {
-                        return Err(ctx.setup_error("checkpoint payload does not match its header".into()))
+                        return Err(
+                            ctx.setup_error("checkpoint payload does not match its header".into())
+                        )
                     }
                 }
             }
@@ -516,9 +519,13 @@ fn dispatch_law<D: Dim>(
     let law = &ctx.scene.law.clone();
     match law {
         Law::HertzMindlin { .. } => match mu {
-            Mu::Finite(0.0) => {
-                run_law::<D, _>(ctx, hertz_mindlin_law(law, Frictionless), range, inside, opts)
-            }
+            Mu::Finite(0.0) => run_law::<D, _>(
+                ctx,
+                hertz_mindlin_law(law, Frictionless),
+                range,
+                inside,
+                opts,
+            ),
             Mu::Finite(m) => run_law::<D, _>(
                 ctx,
                 hertz_mindlin_law(law, Coulomb { mu: m }),
@@ -705,8 +712,7 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
             }
         },
         None => {
-            let mut sys =
-                system_of(scene, law, &ctx.grains).map_err(|e| ctx.setup_error(e))?;
+            let mut sys = system_of(scene, law, &ctx.grains).map_err(|e| ctx.setup_error(e))?;
             sys.init_forces();
             (sys, None)
         }
@@ -771,7 +777,11 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     };
     let n = ctx.stages.len();
     let stopped = run_stages(&mut ctx, sys, 0..n, None, opts)?;
-    let status = if stopped { "interrupted" } else { "equilibrium" };
+    let status = if stopped {
+        "interrupted"
+    } else {
+        "equilibrium"
+    };
     let snap = snapshot_of(sys, scene, status, ctx.pressure);
     Ok((ctx.reports, snap, contacts_at_threshold(sys, scene)))
 }
@@ -807,6 +817,7 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
     opts: &mut RunOptions,
 ) -> Result<bool, RunError> {
     let scene = ctx.scene;
+    let base_law = sys.law;
     let n = sys.len() as f64;
     let ke0 = sys.kinetic_energy() / n;
     let mut last_good = None;
@@ -816,6 +827,14 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
     for k in range {
         let step = ctx.stages[k].1.clone();
         let kind = step.kind();
+        // κ of the stage (GRC07 §III.B.2 ramps), always scaled from the scene's law so that a
+        // resumed run has the same law bit for bit; the time step follows.
+        let factor = step.kappa().map_or(1.0, |k| k / scene.law.kappa());
+        sys.law = base_law.with_kappa_scaled(factor);
+        let (dt, k_max) = time_step::<D, L>(scene, sys);
+        sys.dt = dt;
+        ctx.dt = dt;
+        ctx.k_max = k_max;
         match &step {
             Step::Compress {
                 pressure: p,
@@ -937,7 +956,8 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
                 if ctx.last_checkpoint.elapsed().as_secs_f64() >= spec.every {
                     let wall = wall0 + step_start.elapsed().as_secs_f64();
                     let h = ctx.header(k, true, t0, steps0, wall);
-                    let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
+                    let payload =
+                        checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
                     write_checkpoint(ctx, spec, &h, &payload)?;
                     ctx.last_checkpoint = Instant::now();
                 }

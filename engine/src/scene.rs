@@ -249,6 +249,10 @@ pub enum Step {
         /// between consecutive steps starts the new step without contact history.
         #[serde(default)]
         mu: Option<Mu>,
+        /// Stiffness κ for this step instead of `law.kappa` (contacts and history are kept;
+        /// the time step follows the stiffness).
+        #[serde(default)]
+        kappa: Option<f64>,
     },
     /// Fixed cell.
     FixedVolume {
@@ -260,11 +264,31 @@ pub enum Step {
         full_time: bool,
         #[serde(default)]
         mu: Option<Mu>,
+        #[serde(default)]
+        kappa: Option<f64>,
     },
     /// Fixed cell until all grains form one cluster of interacting grains (GRC07 §III.B,
     /// method 2: aggregation of a cohesive gas).
     Aggregate {
         max_time: f64,
+        #[serde(default)]
+        mu: Option<Mu>,
+        #[serde(default)]
+        kappa: Option<f64>,
+    },
+    /// Stepwise stiffness ramp at a fixed pressure: κ = `from`·`factor`^k up to `to`, each
+    /// level run to its criteria (GRC07 §III.B.2, series B: aggregation at κ = 1e2, then κ
+    /// raised slowly to 1e4).
+    KappaRamp {
+        from: f64,
+        to: f64,
+        factor: f64,
+        pressure: f64,
+        inertia_cap: f64,
+        /// Time limit of each level.
+        max_time: f64,
+        #[serde(default)]
+        criteria: Criteria,
         #[serde(default)]
         mu: Option<Mu>,
     },
@@ -314,6 +338,7 @@ impl Step {
                 | Step::FixedVolume { .. }
                 | Step::Aggregate { .. }
                 | Step::PressureProgram { .. }
+                | Step::KappaRamp { .. }
         )
     }
     pub fn kind(&self) -> &'static str {
@@ -322,6 +347,7 @@ impl Step {
             Step::FixedVolume { .. } => "fixed-volume",
             Step::Aggregate { .. } => "aggregate",
             Step::PressureProgram { .. } => "pressure-program",
+            Step::KappaRamp { .. } => "kappa-ramp",
             Step::HardSphereMix { .. } => "hard-sphere-mix",
             Step::Grow { .. } => "grow",
             Step::Expand { .. } => "expand",
@@ -333,7 +359,8 @@ impl Step {
             Step::Compress { max_time, .. }
             | Step::FixedVolume { max_time, .. }
             | Step::Aggregate { max_time, .. }
-            | Step::PressureProgram { max_time, .. } => *max_time,
+            | Step::PressureProgram { max_time, .. }
+            | Step::KappaRamp { max_time, .. } => *max_time,
             _ => 0.0,
         }
     }
@@ -341,7 +368,8 @@ impl Step {
         match self {
             Step::Compress { criteria, .. }
             | Step::FixedVolume { criteria, .. }
-            | Step::PressureProgram { criteria, .. } => criteria.clone(),
+            | Step::PressureProgram { criteria, .. }
+            | Step::KappaRamp { criteria, .. } => criteria.clone(),
             _ => Criteria::default(),
         }
     }
@@ -351,7 +379,17 @@ impl Step {
             Step::Compress { mu, .. }
             | Step::FixedVolume { mu, .. }
             | Step::Aggregate { mu, .. }
-            | Step::PressureProgram { mu, .. } => *mu,
+            | Step::PressureProgram { mu, .. }
+            | Step::KappaRamp { mu, .. } => *mu,
+            _ => None,
+        }
+    }
+    /// The κ override of a DEM stage.
+    pub fn kappa(&self) -> Option<f64> {
+        match self {
+            Step::Compress { kappa, .. }
+            | Step::FixedVolume { kappa, .. }
+            | Step::Aggregate { kappa, .. } => *kappa,
             _ => None,
         }
     }
@@ -789,6 +827,25 @@ impl Scene {
                     }
                     positive(&f("inertia_cap"), *inertia_cap)?;
                 }
+                Step::KappaRamp {
+                    from,
+                    to,
+                    factor,
+                    pressure,
+                    inertia_cap,
+                    ..
+                } => {
+                    positive(&f("from"), *from)?;
+                    positive(&f("to"), *to)?;
+                    check_pressure("pressure", *pressure)?;
+                    if !(factor.is_finite() && *factor > 1.0 + 1e-6 && *factor <= 100.0) {
+                        return Err(err(
+                            &f("factor"),
+                            format!("must lie in (1, 100] (each level is the previous one times or divided by it), got {factor}"),
+                        ));
+                    }
+                    positive(&f("inertia_cap"), *inertia_cap)?;
+                }
                 Step::HardSphereMix {
                     collisions_per_grain,
                 } => in_range(&f("collisions_per_grain"), *collisions_per_grain, 1e-3, 1e6)?,
@@ -805,6 +862,9 @@ impl Scene {
             }
             if let Some(mu) = step.mu() {
                 check_mu(&f("mu"), mu)?;
+            }
+            if let Some(kappa) = step.kappa() {
+                positive(&f("kappa"), kappa)?;
             }
             if step.is_dem() {
                 positive(&f("max_time"), step.max_time())?;
@@ -868,6 +928,31 @@ impl Scene {
                                 max_time: *max_time,
                                 criteria: criteria.clone(),
                                 mu: *mu,
+                                kappa: None,
+                            },
+                        ));
+                    }
+                }
+                Step::KappaRamp {
+                    from,
+                    to,
+                    factor,
+                    pressure,
+                    inertia_cap,
+                    max_time,
+                    criteria,
+                    mu,
+                } => {
+                    for level in Step::pressure_levels(*from, *to, *factor) {
+                        out.push((
+                            k,
+                            Step::Compress {
+                                pressure: *pressure,
+                                inertia_cap: *inertia_cap,
+                                max_time: *max_time,
+                                criteria: criteria.clone(),
+                                mu: *mu,
+                                kappa: Some(level),
                             },
                         ));
                     }
@@ -876,6 +961,20 @@ impl Scene {
             }
         }
         out
+    }
+
+    /// Lowers every stage's time limit to at most `t`.
+    pub fn cap_max_time(&mut self, t: f64) {
+        for step in &mut self.protocol {
+            match step {
+                Step::Compress { max_time, .. }
+                | Step::FixedVolume { max_time, .. }
+                | Step::Aggregate { max_time, .. }
+                | Step::PressureProgram { max_time, .. }
+                | Step::KappaRamp { max_time, .. } => *max_time = max_time.min(t),
+                _ => {}
+            }
+        }
     }
 
     /// Friction coefficient of a DEM step: its override or `law.mu`.
@@ -887,6 +986,12 @@ impl Scene {
 }
 
 impl Law {
+    /// The stiffness parameter κ.
+    pub fn kappa(&self) -> f64 {
+        match self {
+            Law::HertzMindlin { kappa, .. } | Law::Linear { kappa, .. } => *kappa,
+        }
+    }
     pub fn cohesion(&self) -> Option<Cohesion> {
         match self {
             Law::Linear { cohesion, .. } => *cohesion,

@@ -88,6 +88,14 @@ impl<D: Dim, F: Friction> ContactLaw<D> for HertzMindlin<F> {
         self.normal_stiffness(h, r_eff_max)
     }
 
+    fn with_kappa_scaled(&self, factor: f64) -> Self {
+        // κ = (Ẽ/P)^(2/3) (AR07 (21)).
+        HertzMindlin {
+            e_tilde: self.e_tilde * factor.powf(1.5),
+            ..*self
+        }
+    }
+
     fn describe(&self) -> String {
         format!(
             "hertz-mindlin Ẽ={:.4e} K_T/K_N={:.4} ζ={} μ={}",

@@ -125,6 +125,16 @@ impl<D: Dim, C: Cohesion, F: Friction, R: RollingResistance> ContactLaw<D> for L
         self.kn
     }
 
+    fn with_kappa_scaled(&self, factor: f64) -> Self {
+        // κ = K_N a/F0; K_T/K_N and K_r/(K_N a²) are kept (GRC07 T.I).
+        Linear {
+            kn: self.kn * factor,
+            kt: self.kt * factor,
+            rolling: self.rolling.with_stiffness_scaled(factor),
+            ..*self
+        }
+    }
+
     fn describe(&self) -> String {
         let mut s = format!(
             "linear K_N={:.4e} K_T={:.4e} ζ={} μ={}",

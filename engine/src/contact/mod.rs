@@ -67,6 +67,9 @@ pub trait ContactLaw<D: Dim>: Copy + Send + Sync + std::fmt::Debug + 'static {
     fn max_stiffness(&self, force: f64, r_eff_max: f64) -> f64;
     /// Short description for logs (`hertz-mindlin μ=0.3 ζ=0.98 …`).
     fn describe(&self) -> String;
+    /// The same law with the stiffness parameter κ multiplied by `factor` (GRC07 §III.B.2:
+    /// κ ramps); `factor = 1` returns the law unchanged, bit for bit.
+    fn with_kappa_scaled(&self, factor: f64) -> Self;
     /// Tangential force and rolling moment stored in the history (for snapshots).
     fn stored(&self, hist: &Self::History) -> (D::V, D::Ang);
 }

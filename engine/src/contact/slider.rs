@@ -160,6 +160,8 @@ pub trait RollingResistance: Copy + Send + Sync + std::fmt::Debug + 'static {
         dtheta: D::Ang,
         limit: f64,
     ) -> D::Ang;
+    /// The same resistance with its stiffness multiplied by `factor`.
+    fn with_stiffness_scaled(&self, factor: f64) -> Self;
     fn moment<D: Dim>(st: &Self::State<D>) -> D::Ang;
 }
 
@@ -177,6 +179,9 @@ pub struct RollingSpring {
 impl RollingResistance for NoRolling {
     type State<D: Dim> = ();
     const ACTIVE: bool = false;
+    fn with_stiffness_scaled(&self, _factor: f64) -> Self {
+        NoRolling
+    }
     #[inline(always)]
     fn update<D: Dim>(&self, _: &mut (), _: D::V, _: D::Ang, _: f64) -> D::Ang {
         D::Ang::zero()
@@ -190,6 +195,12 @@ impl RollingResistance for NoRolling {
 impl RollingResistance for RollingSpring {
     type State<D: Dim> = D::Ang;
     const ACTIVE: bool = true;
+    fn with_stiffness_scaled(&self, factor: f64) -> Self {
+        RollingSpring {
+            kr: self.kr * factor,
+            ..*self
+        }
+    }
     #[inline(always)]
     fn update<D: Dim>(&self, st: &mut D::Ang, n: D::V, dtheta: D::Ang, limit: f64) -> D::Ang {
         let mut g = D::transport_ang(*st, n) - dtheta * self.kr;
