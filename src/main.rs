@@ -412,20 +412,36 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
     );
     for s in &outcome.steps {
         let c = &s.checks;
-        println!(
-            "step {}    {:<12} ended at {:<11} t = {:.4e} ({} steps, {:.1} s): Φ = {:.5}, P = {:.6}, force/crit = {:.3}, Ek/crit = {:.3}, stress/crit = {:.3}",
+        let head = format!(
+            "stage {:<3} {:<16} ended at {:<11} t = {:.4e}",
             s.index + 1,
             s.kind,
             s.end.as_str(),
-            s.time,
-            s.steps,
-            s.wall_seconds,
-            c.packing_fraction,
-            c.pressure,
-            c.force_ratio,
-            c.kinetic_ratio,
-            c.stress_ratio
+            s.time
         );
+        if s.end == grainbench_engine::run::StepEnd::Done {
+            // Hard-grain stages: `steps` counts pair collisions.
+            println!(
+                "{head} ({} collisions, {:.1} s): Φ = {:.5}",
+                s.steps, s.wall_seconds, c.packing_fraction
+            );
+        } else {
+            println!(
+                "{head} ({} steps, {:.1} s): Φ = {:.5}, P = {:.6}, force/crit = {:.3}, Ek/crit = {:.3}, stress/crit = {:.3}{}",
+                s.steps,
+                s.wall_seconds,
+                c.packing_fraction,
+                c.pressure,
+                c.force_ratio,
+                c.kinetic_ratio,
+                c.stress_ratio,
+                if c.clusters > 0 {
+                    format!(", clusters = {}", c.clusters)
+                } else {
+                    String::new()
+                }
+            );
+        }
     }
     if outcome.contacts_at_threshold > 0 {
         println!(

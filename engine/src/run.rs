@@ -108,7 +108,9 @@ pub struct StepReport {
     pub index: usize,
     pub kind: String,
     pub end: StepEnd,
+    /// Time spent in the stage (hard-grain stages: their own event-driven time).
     pub time: f64,
+    /// Time steps (hard-grain stages: pair collisions).
     pub steps: u64,
     pub wall_seconds: f64,
     pub checks: Checks,

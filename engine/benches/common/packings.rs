@@ -125,6 +125,7 @@ pub fn prepare<D: Dim, L: ContactLaw<D>>(scene: &Scene, law: L, phi_stop: f64) -
     let mut opts = RunOptions {
         progress: Some(&mut progress),
         stop: Some(&stop),
+        ..Default::default()
     };
     // On a pool worker, as `run_scene` does.
     rayon::scope(|_| run_protocol(scene, &mut sys, &mut opts)).expect("preparation run");
