@@ -236,7 +236,7 @@ fn frictionless_3d_packing_reaches_ar07_criteria() {
 /// §III.A). Hence Φ ∈ [0.79, 0.82], z ∈ [2.55, 2.95].
 #[test]
 fn cohesionless_2d_packing_reaches_criteria() {
-    let a = equilibrated("grc07-cohesionless-small");
+    let a = equilibrated("grc07-cohesionless-phi036-mu05-ci");
     let phi = f(&a, &["packing_fraction"]);
     let z = f(&a, &["z"]);
     assert!((0.79..=0.82).contains(&phi), "Φ = {phi}");

@@ -97,3 +97,8 @@ fn ar07_a_ci_lands_in_its_bands() {
 fn ar07_d_ci_lands_in_its_bands() {
     check_ci_scene("ar07-D-ci");
 }
+
+#[test]
+fn grc07_cohesionless_ci_lands_in_its_bands() {
+    check_ci_scene("grc07-cohesionless-phi036-mu05-ci");
+}

@@ -598,6 +598,7 @@ pub fn linear_law<C, F, R>(law: &Law, cohesion: C, friction: F, rolling: R) -> L
         kappa,
         zeta,
         kt_over_kn,
+        tangential_damping,
         ..
     } = law
     else {
@@ -607,6 +608,7 @@ pub fn linear_law<C, F, R>(law: &Law, cohesion: C, friction: F, rolling: R) -> L
         kn: *kappa,
         kt: kappa * kt_over_kn,
         zeta: *zeta,
+        zeta_t: *tangential_damping,
         cohesion,
         friction,
         rolling,
@@ -661,7 +663,12 @@ pub fn system_of<D: Dim, L: ContactLaw<D>>(
     grains: &Grains<D>,
 ) -> Result<System<D, L>, String> {
     let total_mass: f64 = grains.diameter.iter().map(|d| d.powi(D::D as i32)).sum();
-    let cell = Cell::new(grains.l, scene.numerics.cell_mass * total_mass);
+    let mut cell_mass = scene.numerics.cell_mass * total_mass;
+    if scene.numerics.cell_mass_per_length {
+        // GRC07 §II.A: divided by a linear size of the cell.
+        cell_mass /= D::product(grains.l).powf(1.0 / D::D as f64);
+    }
+    let cell = Cell::new(grains.l, cell_mass);
     let mut sys = System::new(
         law,
         cell,

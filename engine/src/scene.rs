@@ -155,6 +155,12 @@ pub enum Law {
         /// K_T/K_N.
         #[serde(default = "one")]
         kt_over_kn: f64,
+        /// Viscous damping of the tangential and rolling relative motion in contacts, as a
+        /// fraction of critical. GRC07 §II.B has none ("we chose not to implement any
+        /// tangential viscous force"): 0 is the paper's law; a positive value is a deviation,
+        /// reported as such, that damps the oscillations of grains held by a single contact.
+        #[serde(default)]
+        tangential_damping: f64,
         /// Adhesion: contact pull −F0 and linear attraction over the gap range D0 (GRC07 (4)–(5)).
         #[serde(default)]
         cohesion: Option<Cohesion>,
@@ -211,8 +217,13 @@ pub struct Numerics {
     /// Verlet skin in units of a.
     pub skin: f64,
     /// Generalized mass of the cell as a fraction of the total grain mass (AR07 §II.B: ~1;
-    /// GRC07 §II.A: 3/10).
+    /// GRC07 §II.A: 3/10, divided by the cell length, see `cell_mass_per_length`).
     pub cell_mass: f64,
+    /// Divide the cell mass by the cell length L/a (GRC07 §II.A: "a fraction of the sum of
+    /// grain masses (3/10 in most calculations), divided by a linear size L of the cell"; their
+    /// (3) is written for strains, M ε̈ = σ^I − σ^M, which makes M a mass per length). L is
+    /// taken when the soft-contact stages start.
+    pub cell_mass_per_length: bool,
     /// Steps between equilibrium checks and progress reports.
     pub check_every: u64,
     /// The run stops as unstable when an overlap exceeds this fraction of the smaller radius.
@@ -226,6 +237,7 @@ impl Default for Numerics {
             stiffness_force: 10.0,
             skin: 0.05,
             cell_mass: 1.0,
+            cell_mass_per_length: false,
             check_every: 200,
             max_overlap: 0.1,
         }
@@ -691,7 +703,9 @@ impl Scene {
                 kt_over_kn,
                 cohesion,
                 rolling,
+                tangential_damping,
             } => {
+                in_range("law.tangential_damping", *tangential_damping, 0.0, 1.0)?;
                 positive("law.kappa", *kappa)?;
                 check_mu("law.mu", *mu)?;
                 in_range("law.zeta", *zeta, 0.0, 1.0)?;

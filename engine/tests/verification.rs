@@ -228,6 +228,7 @@ fn linear_damped_restitution() {
             kn,
             kt: kn,
             zeta,
+            zeta_t: 0.0,
             cohesion: NoCohesion,
             friction: Frictionless,
             rolling: NoRolling,
@@ -263,6 +264,7 @@ fn adhesive(zeta: f64) -> Linear<Adhesion, Frictionless, NoRolling> {
         kn: 1e5,
         kt: 1e5,
         zeta,
+        zeta_t: 0.0,
         cohesion: Adhesion { f0: 1.0, d0: 1e-3 },
         friction: Frictionless,
         rolling: NoRolling,
@@ -399,6 +401,7 @@ fn oblique_impact(ratio: f64) -> Oblique {
         kn: 1e5,
         kt: 1e5,
         zeta: 0.5,
+        zeta_t: 0.0,
         cohesion: NoCohesion,
         friction: Coulomb { mu },
         rolling: NoRolling,
@@ -583,6 +586,7 @@ fn rolling_resistance_spring_and_cap() {
         kn,
         kt: kn,
         zeta: 0.8,
+        zeta_t: 0.0,
         cohesion: NoCohesion,
         friction: Coulomb { mu: 10.0 },
         rolling: RollingSpring { kr, mu_r },
@@ -684,6 +688,7 @@ fn energy_conservation_linear_2d() {
         kn,
         kt: kn,
         zeta: 0.0,
+        zeta_t: 0.0,
         cohesion: NoCohesion,
         friction: Frictionless,
         rolling: NoRolling,
@@ -728,6 +733,7 @@ fn spin_drive<F: grainbench_engine::contact::slider::Friction>(
         kn: 1e5,
         kt: 1e5,
         zeta: 0.5,
+        zeta_t: 0.0,
         cohesion: NoCohesion,
         friction,
         rolling: NoRolling,
@@ -813,6 +819,7 @@ fn frictionless_exerts_no_tangential_force() {
         kn: 1e5,
         kt: 1e5,
         zeta: 0.5,
+        zeta_t: 0.0,
         cohesion: NoCohesion,
         friction: Frictionless,
         rolling: RollingSpring { kr: 0.0, mu_r: 0.0 },
@@ -853,6 +860,7 @@ fn init_forces_does_not_advance_history() {
         kn: 1e5,
         kt: 1e5,
         zeta: 0.5,
+        zeta_t: 0.0,
         cohesion: NoCohesion,
         friction: NoSlip,
         rolling: RollingSpring {
@@ -876,4 +884,59 @@ fn init_forces_does_not_advance_history() {
     let c = sys.interactions()[0];
     assert!(rel(c.tangential.norm(), 1e5 * 1e-4) < 1e-9);
     assert!(rel(c.rolling.norm(), 10.0 * 2.0 * 1e-4) < 1e-9);
+}
+
+/// The optional tangential/rolling dashpot (`law.tangential_damping`, not in GRC07): with the
+/// same motion, the damped law differs from the undamped one by exactly −η_t v_t in T
+/// (η_t = 2ζ_t√(K_T m*)) and by −η_r ω_r in the rolling moment (η_r = 2ζ_t√(K_r m*) r*);
+/// ζ_t = 0 leaves the law unchanged.
+#[test]
+fn tangential_damping_adds_a_dashpot_outside_the_springs() {
+    let law = |zeta_t: f64| Linear {
+        kn: 1e5,
+        kt: 1e5,
+        zeta: 0.8,
+        zeta_t,
+        cohesion: NoCohesion,
+        friction: Coulomb { mu: 10.0 },
+        rolling: RollingSpring {
+            kr: 10.0,
+            mu_r: 10.0,
+        },
+    };
+    let run = |zeta_t: f64| {
+        let mut sys = two_disks(law(zeta_t), -1e-3);
+        freeze(&mut sys, 0);
+        freeze(&mut sys, 1);
+        sys.dt = 1e-6;
+        sys.init_forces();
+        // Slip of j relative to i along +y at 0.01, and relative rolling rate 0.5.
+        sys.u[0] = Vector2::new(0.0, -0.005);
+        sys.u[1] = Vector2::new(0.0, 0.005);
+        sys.w[0] = -0.25;
+        sys.w[1] = 0.25;
+        sys.step();
+        // Force and moment on j (the snapshot rows hold the springs' parts only).
+        (sys.force[1], sys.torque[1])
+    };
+    let (plain, damped) = (run(0.0), run(0.3));
+    let (m_eff, r_eff): (f64, f64) = (0.5, 0.25);
+    let eta_t = 2.0 * 0.3 * (1e5 * m_eff).sqrt();
+    let eta_r = 2.0 * 0.3 * (10.0 * m_eff).sqrt() * r_eff;
+    // Contact-point slip: (u_j − u_i) − (ω_i R_i + ω_j R_j) ẑ × n, n = x̂.
+    let v_slip = 0.01 - (-0.25 * 0.5 + 0.25 * 0.5);
+    let d_force = damped.0 - plain.0;
+    assert!(
+        (d_force - Vector2::new(0.0, -eta_t * v_slip)).norm() <= 1e-6 * eta_t * v_slip,
+        "{d_force:?}"
+    );
+    // Moment on j: the lever arm −R_j n of the tangential dashpot, and the rolling dashpot.
+    let d_moment = damped.1 - plain.1;
+    let expected = -0.5 * d_force.y - eta_r * 0.5;
+    assert!(
+        (d_moment - expected).abs() <= 1e-6 * eta_r,
+        "{d_moment} vs {expected}"
+    );
+    // Undamped, after one step the springs hold only K_T v dt.
+    assert!(plain.0.y.abs() < 0.01 * eta_t * v_slip);
 }

@@ -57,6 +57,8 @@ pub struct Linear<C, F, R> {
     pub kt: f64,
     /// ζ: fraction of critical damping, η = ζ√(4 K_N m_i m_j/(m_i+m_j)) (GRC07 (6)).
     pub zeta: f64,
+    /// Tangential and rolling viscous damping, fraction of critical (0 in GRC07).
+    pub zeta_t: f64,
     pub cohesion: C,
     pub friction: F,
     pub rolling: R,
@@ -99,17 +101,32 @@ impl<D: Dim, C: Cohesion, F: Friction, R: RollingResistance> ContactLaw<D> for L
         // GRC07 (5): N = N_e + N_v − F0.
         let normal = ne - eta * vn - self.cohesion.f0();
         let tangential = if F::ACTIVE {
-            let slip = (p.v_contact - p.n * vn) * dt;
+            let vt = p.v_contact - p.n * vn;
             let pivot = 0.5 * D::pivot_rate(p.w_i + p.w_j, p.n) * dt;
             // GRC07 (8): the Coulomb cap uses the elastic repulsive part only.
-            self.friction
-                .update::<D>(&mut hist.tangential, p.n, pivot, slip, self.kt, ne)
+            let t =
+                self.friction
+                    .update::<D>(&mut hist.tangential, p.n, pivot, vt * dt, self.kt, ne);
+            if self.zeta_t > 0.0 {
+                // Optional tangential dashpot (not in GRC07), outside the Coulomb cap.
+                t - vt * (2.0 * self.zeta_t * (self.kt * p.m_eff).sqrt())
+            } else {
+                t
+            }
         } else {
             D::V::zero()
         };
         let rolling = if R::ACTIVE {
-            let dtheta = D::rolling_part(p.w_j - p.w_i, p.n) * dt;
-            self.rolling.update::<D>(&mut hist.rolling, p.n, dtheta, ne)
+            let wr = D::rolling_part(p.w_j - p.w_i, p.n);
+            let g = self
+                .rolling
+                .update::<D>(&mut hist.rolling, p.n, wr * dt, ne);
+            if self.zeta_t > 0.0 {
+                // Optional rolling dashpot, η_r = 2ζ_t √(K_r m_eff r_eff²).
+                g - wr * (2.0 * self.zeta_t * (self.rolling.stiffness() * p.m_eff).sqrt() * p.r_eff)
+            } else {
+                g
+            }
         } else {
             D::Ang::zero()
         };

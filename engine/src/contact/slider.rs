@@ -162,6 +162,8 @@ pub trait RollingResistance: Copy + Send + Sync + std::fmt::Debug + 'static {
     ) -> D::Ang;
     /// The same resistance with its stiffness multiplied by `factor`.
     fn with_stiffness_scaled(&self, factor: f64) -> Self;
+    /// Rolling stiffness K_r (0 without rolling resistance).
+    fn stiffness(&self) -> f64;
     fn moment<D: Dim>(st: &Self::State<D>) -> D::Ang;
 }
 
@@ -182,6 +184,9 @@ impl RollingResistance for NoRolling {
     fn with_stiffness_scaled(&self, _factor: f64) -> Self {
         NoRolling
     }
+    fn stiffness(&self) -> f64 {
+        0.0
+    }
     #[inline(always)]
     fn update<D: Dim>(&self, _: &mut (), _: D::V, _: D::Ang, _: f64) -> D::Ang {
         D::Ang::zero()
@@ -200,6 +205,9 @@ impl RollingResistance for RollingSpring {
             kr: self.kr * factor,
             ..*self
         }
+    }
+    fn stiffness(&self) -> f64 {
+        self.kr
     }
     #[inline(always)]
     fn update<D: Dim>(&self, st: &mut D::Ang, n: D::V, dtheta: D::Ang, limit: f64) -> D::Ang {
