@@ -160,7 +160,9 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
     }
     let s: serde_json::Value = serde_json::from_slice(&std::fs::read(&summary)?)
         .with_context(|| format!("reading {}", summary.display()))?;
-    let same = serde_json::to_value(scene)? == s["settings"];
+    // Compared as scenes, so fields added later with defaults do not count as changes.
+    let same = serde_json::from_value::<grainbench_engine::Scene>(s["settings"].clone())
+        .is_ok_and(|saved| &saved == scene);
     let status = s["status"].as_str().unwrap_or("").to_string();
     if !same || status == "interrupted" {
         return Ok(None);
