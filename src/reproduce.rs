@@ -27,6 +27,8 @@ struct SeedRun {
     wall_seconds: f64,
     status: String,
     steps: serde_json::Value,
+    /// Worker threads of the run (results do not depend on it; wall time does).
+    threads: usize,
 }
 
 /// The states `reproduce` knows for `paper` (embedded scenes named `<paper>-<state>`).
@@ -114,6 +116,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             status: o.snapshot.status.clone(),
             wall_seconds: o.wall_seconds,
             steps: serde_json::to_value(&o.steps)?,
+            threads: rayon::current_num_threads(),
             snapshot: o.snapshot,
         });
     }
@@ -148,6 +151,15 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     if a.record {
         let path = record(a, &scene_name, &state_key, &runs, &values, &table)?;
         println!("recorded   {}", path.display());
+        // The table and the vector plots go beside the record, for reading on the web.
+        for f in ["report.md", "pf.svg", "gr.svg"] {
+            let (from, to) = (out.join(f), path.with_file_name(f));
+            if from.exists() {
+                let bytes = std::fs::read(&from)?;
+                snapshot::write_atomic(&to, &bytes)?;
+                println!("recorded   {}", to.display());
+            }
+        }
     }
     Ok(0)
 }
@@ -174,6 +186,7 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
         wall_seconds: s["wall_seconds"].as_f64().unwrap_or(f64::NAN),
         status,
         steps: s["steps"].clone(),
+        threads: s["threads"].as_u64().unwrap_or(0) as usize,
     }))
 }
 
@@ -230,14 +243,14 @@ fn record(
             "grainbench reproduce {} --state {}{} --seeds {}{} -j {}",
             a.paper, a.state, if a.ci { " --ci" } else { "" }, seeds.join(","),
             a.max_time.map(|t| format!(" --max-time {t}")).unwrap_or_default(),
-            rayon::current_num_threads()
+            runs.first().map_or(rayon::current_num_threads(), |r| r.threads)
         ),
-        "threads": rayon::current_num_threads(),
         "n": runs.first().map(|r| r.snapshot.particles.radius.len()),
         "seeds": runs.iter().zip(values).map(|(r, v)| serde_json::json!({
             "seed": r.seed,
             "status": r.status,
             "wall_seconds": r.wall_seconds,
+            "threads": r.threads,
             "stages": r.steps,
             "metrics": v.iter().cloned().collect::<std::collections::BTreeMap<String, f64>>(),
         })).collect::<Vec<_>>(),
