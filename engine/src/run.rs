@@ -238,7 +238,33 @@ struct Ctx<'s, D: Dim> {
     at_threshold: usize,
 }
 
-impl<D: Dim> Ctx<'_, D> {
+impl<'s, D: Dim> Ctx<'s, D> {
+    /// A run of `scene` starting now, with no grains yet.
+    fn new(scene: &'s Scene) -> Self {
+        Ctx {
+            scene,
+            stages: scene.stages(),
+            start: Instant::now(),
+            wall_before: 0.0,
+            reports: Vec::new(),
+            pressure: None,
+            grains: Grains {
+                l: D::V::zero(),
+                s: Vec::new(),
+                u: Vec::new(),
+                diameter: Vec::new(),
+                time: 0.0,
+                step: 0,
+            },
+            neighbor_builds: 0,
+            last_checkpoint: Instant::now(),
+            dt: 0.0,
+            k_max: 0.0,
+            law: String::new(),
+            at_threshold: 0,
+        }
+    }
+
     fn header(&self, stage: usize, inside: bool, t0: f64, steps0: u64, stage_wall: f64) -> Header {
         Header {
             format: checkpoint::FORMAT.into(),
@@ -317,31 +343,8 @@ pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
 }
 
 fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunError> {
-    let start = Instant::now();
-    let stages = scene.stages();
     let resume = opts.resume.take();
-    let mut ctx = Ctx::<D> {
-        scene,
-        stages,
-        start,
-        wall_before: 0.0,
-        reports: Vec::new(),
-        pressure: None,
-        grains: Grains {
-            l: D::V::zero(),
-            s: Vec::new(),
-            u: Vec::new(),
-            diameter: Vec::new(),
-            time: 0.0,
-            step: 0,
-        },
-        neighbor_builds: 0,
-        last_checkpoint: Instant::now(),
-        dt: 0.0,
-        k_max: 0.0,
-        law: String::new(),
-        at_threshold: 0,
-    };
+    let mut ctx = Ctx::<D>::new(scene);
     let mut k = 0;
     let mut inside: Option<(Header, Vec<u8>)> = None;
     match resume {
@@ -421,7 +424,7 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
         dt: ctx.dt,
         k_max: ctx.k_max,
         law: ctx.law,
-        wall_seconds: ctx.wall_before + start.elapsed().as_secs_f64(),
+        wall_seconds: ctx.wall_before + ctx.start.elapsed().as_secs_f64(),
         neighbor_builds: ctx.neighbor_builds,
         contacts_at_threshold: ctx.at_threshold,
     })
@@ -762,28 +765,7 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     opts: &mut RunOptions,
 ) -> Result<(Vec<StepReport>, Snapshot, usize), RunError> {
     sys.init_forces();
-    let mut ctx = Ctx::<D> {
-        scene,
-        stages: scene.stages(),
-        start: Instant::now(),
-        wall_before: 0.0,
-        reports: Vec::new(),
-        pressure: None,
-        grains: Grains {
-            l: sys.cell.l,
-            s: Vec::new(),
-            u: Vec::new(),
-            diameter: Vec::new(),
-            time: 0.0,
-            step: 0,
-        },
-        neighbor_builds: 0,
-        last_checkpoint: Instant::now(),
-        dt: sys.dt,
-        k_max: 0.0,
-        law: String::new(),
-        at_threshold: 0,
-    };
+    let mut ctx = Ctx::<D>::new(scene);
     let n = ctx.stages.len();
     let stopped = run_stages(&mut ctx, sys, 0..n, None, opts)?;
     let status = if stopped {

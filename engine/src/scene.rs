@@ -809,6 +809,17 @@ impl Scene {
                 }
                 Ok(())
             };
+            // Levels of a program: each the previous one times (or divided by) the factor.
+            let check_factor = |factor: f64| -> Result<(), SceneError> {
+                if factor.is_finite() && factor > 1.0 + 1e-6 && factor <= 100.0 {
+                    Ok(())
+                } else {
+                    Err(err(
+                        &f("factor"),
+                        format!("must lie in (1, 100] (each level is the previous one times or divided by it), got {factor}"),
+                    ))
+                }
+            };
             match step {
                 Step::Compress {
                     pressure,
@@ -833,12 +844,7 @@ impl Scene {
                             "must be > 0 (levels are multiples of each other)".into(),
                         ));
                     }
-                    if !(factor.is_finite() && *factor > 1.0 + 1e-6 && *factor <= 100.0) {
-                        return Err(err(
-                            &f("factor"),
-                            format!("must lie in (1, 100] (each level is the previous one times or divided by it), got {factor}"),
-                        ));
-                    }
+                    check_factor(*factor)?;
                     positive(&f("inertia_cap"), *inertia_cap)?;
                 }
                 Step::KappaRamp {
@@ -852,12 +858,7 @@ impl Scene {
                     positive(&f("from"), *from)?;
                     positive(&f("to"), *to)?;
                     check_pressure("pressure", *pressure)?;
-                    if !(factor.is_finite() && *factor > 1.0 + 1e-6 && *factor <= 100.0) {
-                        return Err(err(
-                            &f("factor"),
-                            format!("must lie in (1, 100] (each level is the previous one times or divided by it), got {factor}"),
-                        ));
-                    }
+                    check_factor(*factor)?;
                     positive(&f("inertia_cap"), *inertia_cap)?;
                 }
                 Step::HardSphereMix {
