@@ -310,7 +310,7 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
         if plain && last_line.elapsed().as_secs_f64() >= 5.0 {
             last_line = std::time::Instant::now();
             eprintln!(
-                "  step {}/{} {} t={:.4e}/{:.1e} Φ={:.4} P/P₀={:.4} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}",
+                "  stage {}/{} {} t={:.4e}/{:.1e} Φ={:.4} P/P₀={:.4} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}{}",
                 p.step_index + 1,
                 p.step_count,
                 p.step_kind,
@@ -322,11 +322,16 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
                 c.force_ratio,
                 c.stress_ratio,
                 c.kinetic_ratio,
-                c.interactions
+                c.interactions,
+                if c.clusters > 0 {
+                    format!(" clusters={}", c.clusters)
+                } else {
+                    String::new()
+                }
             );
         }
         bar.set_prefix(format!(
-            "step {}/{} {}",
+            "stage {}/{} {}",
             p.step_index + 1,
             p.step_count,
             p.step_kind

@@ -342,3 +342,106 @@ fn interrupted_runs_resume_bit_identical() {
         .code(2)
         .stderr(predicate::str::contains("checkpoint"));
 }
+
+/// Every kind of stage in one small 2D run: hard-disk mixing and growth, a frictionless
+/// compression, an expansion and remixing, then friction on with a stiffness ramp and a
+/// pressure program.
+const ALL_STAGES: &str = r#"
+name = "all-stages"
+dimension = 2
+seed = 2
+[particles]
+count = 120
+min_diameter = 0.5
+[law]
+kind = "linear"
+kappa = 1e4
+mu = 0.5
+zeta = 0.8
+[initial]
+packing_fraction = 0.3
+[[protocol]]
+kind = "hard-sphere-mix"
+collisions_per_grain = 5.0
+[[protocol]]
+kind = "grow"
+packing_fraction = 0.6
+[[protocol]]
+kind = "compress"
+pressure = 1.0
+inertia_cap = 0.05
+max_time = 20.0
+mu = 0.0
+[[protocol]]
+kind = "expand"
+factor = 1.01
+[[protocol]]
+kind = "hard-sphere-mix"
+collisions_per_grain = 5.0
+[[protocol]]
+kind = "kappa-ramp"
+from = 1e3
+to = 1e4
+factor = 10.0
+pressure = 1.0
+inertia_cap = 0.05
+max_time = 10.0
+[[protocol]]
+kind = "pressure-program"
+from = 1.0
+to = 4.0
+factor = 2.0
+inertia_cap = 0.05
+max_time = 10.0
+"#;
+
+#[test]
+fn every_stage_kind_runs_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_file(dir.path(), "all.toml", ALL_STAGES);
+    grainbench()
+        .args(["run", "-q", "-o"])
+        .arg(dir.path().join("out"))
+        .arg(&scene)
+        .assert()
+        .success();
+    let summary: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("out/summary.json")).unwrap())
+            .unwrap();
+    let kinds: Vec<&str> = summary["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        kinds,
+        [
+            "hard-sphere-mix",
+            "grow",
+            "compress",
+            "expand",
+            "hard-sphere-mix",
+            "compress",
+            "compress",
+            "compress",
+            "compress",
+            "compress"
+        ]
+    );
+    // Growth ends at Φ = 0.6 exactly; the last level holds P = 4.
+    let grown = summary["steps"][1]["checks"]["packing_fraction"]
+        .as_f64()
+        .unwrap();
+    assert!((grown - 0.6).abs() < 1e-9, "{grown}");
+    let last = &summary["steps"][9]["checks"];
+    assert!(
+        (last["pressure"].as_f64().unwrap() / 4.0 - 1.0).abs() < 0.05,
+        "{last}"
+    );
+    let snap: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("out/final.snap.json")).unwrap())
+            .unwrap();
+    assert_eq!(snap["mu"], 0.5);
+    assert_eq!(snap["pressure_target"], 4.0);
+}

@@ -1070,6 +1070,45 @@ mod tests {
     }
 
     #[test]
+    fn procedure_steps_are_checked() {
+        let with = |extra: &str| BASE.to_string() + extra;
+        // Aggregation needs cohesion; factors of programs must exceed 1; LS targets are bounded.
+        let e = err(
+            &with("[[protocol]]\nkind = \"aggregate\"\nmax_time = 10.0\n")
+                .replace("cohesion = { d0 = 1e-3 }\n", "")
+                .replace("preset = \"grc07\"", "preset = \"ar07\"")
+                .replace("pressure = 0.01", "pressure = 1.0"),
+        );
+        assert_eq!(e.field, "protocol[1].kind", "{e}");
+        let e = err(&with("[[protocol]]\nkind = \"pressure-program\"\nfrom = 0.01\nto = 1.0\nfactor = 1.0\ninertia_cap = 0.05\nmax_time = 10.0\n"));
+        assert_eq!(e.field, "protocol[1].factor", "{e}");
+        let e = err(&with(
+            "[[protocol]]\nkind = \"grow\"\npacking_fraction = 0.95\n",
+        ));
+        assert_eq!(e.field, "protocol[1].packing_fraction", "{e}");
+        let e = err(&with("[[protocol]]\nkind = \"expand\"\nfactor = 0.9\n"));
+        assert_eq!(e.field, "protocol[1].factor", "{e}");
+        // FCC needs 4k³ equal spheres.
+        let e = err(&BASE.replace(
+            "packing_fraction = 0.36",
+            "arrangement = \"fcc\"\npacking_fraction = 0.36",
+        ));
+        assert_eq!(e.field, "initial.arrangement", "{e}");
+        // A valid program unrolls into one compress stage per level, ending exactly at `to`.
+        let s = Scene::from_toml(
+            &with("[[protocol]]\nkind = \"pressure-program\"\nfrom = 0.01\nto = 13.33\nfactor = 1.333521432163324\ninertia_cap = 0.05\nmax_time = 10.0\ncriteria = { preset = \"grc08\" }\n"),
+            Path::new("s"),
+        )
+        .unwrap();
+        let stages = s.stages();
+        assert_eq!(stages.len(), 1 + 26);
+        assert!(
+            matches!(stages.last().unwrap().1, Step::Compress { pressure, .. } if pressure == 13.33)
+        );
+        assert!(stages.iter().all(|(k, _)| *k <= 1));
+    }
+
+    #[test]
     fn unknown_keys_are_refused() {
         let e = err(&BASE.replace("seed = 1", "seed = 1\nsede = 2"));
         assert!(e.message.contains("sede"), "{e}");
