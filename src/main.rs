@@ -310,14 +310,14 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
         if plain && last_line.elapsed().as_secs_f64() >= 5.0 {
             last_line = std::time::Instant::now();
             eprintln!(
-                "  stage {}/{} {} t={:.4e}/{:.1e} Φ={:.4} P/P₀={:.4} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}{}",
+                "  stage {}/{} {} t={:.4e}/{:.1e} Φ={:.4} {} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}{}",
                 p.step_index + 1,
                 p.step_count,
                 p.step_kind,
                 p.time,
                 p.max_time,
                 c.packing_fraction,
-                c.pressure / c.pressure_target,
+                pressure_text(c),
                 c.kinetic_per_grain,
                 c.force_ratio,
                 c.stress_ratio,
@@ -338,10 +338,10 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
         ));
         bar.set_position(((p.time / p.max_time).min(1.0) * 1000.0) as u64);
         bar.set_message(format!(
-            "t={:.4e} Φ={:.4} P/P₀={:.4} Ek/grain={:.2e} F/crit={:.2e} contacts={}",
+            "t={:.4e} Φ={:.4} {} Ek/grain={:.2e} F/crit={:.2e} contacts={}",
             p.time,
             c.packing_fraction,
-            c.pressure / c.pressure_target,
+            pressure_text(c),
             c.kinetic_per_grain,
             c.force_ratio,
             c.interactions
@@ -469,6 +469,15 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
         return Ok((130, Some(outcome)));
     }
     Ok((0, Some(outcome)))
+}
+
+/// P/P₀ against a positive target, else P itself (fixed cell, or P* = 0).
+fn pressure_text(c: &grainbench_engine::run::Checks) -> String {
+    if c.pressure_target > 0.0 {
+        format!("P/P₀={:.4}", c.pressure / c.pressure_target)
+    } else {
+        format!("P={:.3e}", c.pressure)
+    }
 }
 
 fn analysis_of(snap: &Snapshot) -> grainbench_comparisons::metrics::Analysis {
