@@ -31,12 +31,13 @@ struct SeedRun {
     threads: usize,
 }
 
-/// The states `reproduce` knows for `paper` (embedded scenes named `<paper>-<state>`).
+/// The states `reproduce` knows for `paper`: embedded scenes named `<paper>-<state>` with
+/// published values to compare with.
 fn states_of(paper: &str) -> Vec<String> {
     library::SCENES
         .iter()
+        .filter(|(n, _)| paper::paper_values(n).is_some())
         .filter_map(|(n, _)| n.strip_prefix(&format!("{paper}-")))
-        .filter(|s| !s.ends_with("-ci"))
         .map(String::from)
         .collect()
 }
@@ -79,6 +80,15 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     }
     // A scene may reproduce another published row (the CI variant of D runs at 10 kPa).
     let state_key = base.paper_state.clone().unwrap_or(state_key);
+    if paper::paper_values(&state_key).is_none() {
+        bail!(
+            "scene {scene_name} has no published values to compare with (no state {state_key:?} in golden/paper-values.toml); run it with `grainbench run {scene_name}`. {paper} states with scenes and values: {}",
+            match states_of(&paper).join(", ") {
+                s if s.is_empty() => "none yet".to_string(),
+                s => s,
+            }
+        );
+    }
     let out = a
         .out
         .clone()
