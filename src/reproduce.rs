@@ -36,7 +36,13 @@ struct SeedRun {
 fn states_of(paper: &str) -> Vec<String> {
     library::SCENES
         .iter()
-        .filter(|(n, _)| paper::paper_values(n).is_some())
+        .filter(|(n, text)| {
+            let key = grainbench_engine::Scene::from_toml(text, Path::new(n))
+                .ok()
+                .and_then(|s| s.paper_state)
+                .unwrap_or_else(|| n.to_string());
+            !n.ends_with("-ci") && paper::paper_values(&key).is_some()
+        })
         .filter_map(|(n, _)| n.strip_prefix(&format!("{paper}-")))
         .map(String::from)
         .collect()
