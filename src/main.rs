@@ -323,11 +323,7 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
                 c.stress_ratio,
                 c.kinetic_ratio,
                 c.interactions,
-                if c.clusters > 0 {
-                    format!(" clusters={}", c.clusters)
-                } else {
-                    String::new()
-                }
+                clusters_text(c)
             );
         }
         bar.set_prefix(format!(
@@ -440,11 +436,7 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
                 c.force_ratio,
                 c.kinetic_ratio,
                 c.stress_ratio,
-                if c.clusters > 0 {
-                    format!(", clusters = {}", c.clusters)
-                } else {
-                    String::new()
-                }
+                clusters_text(c)
             );
         }
     }
@@ -469,6 +461,15 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
         return Ok((130, Some(outcome)));
     }
     Ok((0, Some(outcome)))
+}
+
+/// The cluster count of aggregation stages (empty elsewhere).
+fn clusters_text(c: &grainbench_engine::run::Checks) -> String {
+    if c.clusters > 0 {
+        format!(" clusters={}", c.clusters)
+    } else {
+        String::new()
+    }
 }
 
 /// P/P₀ against a positive target, else P itself (fixed cell, or P* = 0).

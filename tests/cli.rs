@@ -250,8 +250,8 @@ fn cohesionless_2d_packing_reaches_criteria() {
     assert!(eq18.abs() < 0.05, "GRC07 (18) off by {eq18}");
 }
 
-/// A frictional run long enough to be interrupted; the hard-sphere stage and the expansion
-/// exercise the checkpoints taken between stages.
+/// A frictional run long enough to be interrupted; the hard-sphere stage exercises the
+/// checkpoint taken at a stage start.
 const RESUMABLE: &str = r#"
 name = "resumable"
 dimension = 3
