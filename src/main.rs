@@ -250,14 +250,13 @@ fn scene_and_out(
 /// exit status and the outcome when the run ended normally or was interrupted.
 pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outcome>)> {
     let quiet = flags.quiet;
-    let scene = scene.clone();
     let cp_path = out.join(CHECKPOINT);
     let resume = if flags.resume {
         let cp = Checkpoint::read(&cp_path).map_err(|e| {
             anyhow::anyhow!("{e}\n(--resume continues a run from {}; there is nothing to resume without it: run without --resume)", cp_path.display())
         })?;
         let saved = cp.scene().map_err(anyhow::Error::msg)?;
-        if saved != scene {
+        if &saved != scene {
             bail!(
                 "the checkpoint {} belongs to scene {:?} with other settings than the scene given; resume with the same scene, or omit the scene and give only --out",
                 cp_path.display(),
@@ -352,7 +351,7 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
         );
     }
     let result = grainbench_engine::run_scene(
-        &scene,
+        scene,
         &mut RunOptions {
             progress: Some(&mut on_progress),
             stop: Some(stop),

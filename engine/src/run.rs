@@ -777,9 +777,8 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     Ok((ctx.reports, snap, contacts_at_threshold(sys, scene)))
 }
 
-/// Number of clusters of grains linked by interactions (contacts or distant attractions).
-fn clusters<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> usize {
-    let n = sys.len();
+/// Number of clusters of `n` grains linked by interactions (contacts or distant attractions).
+fn clusters<D: Dim>(n: usize, inter: &[system::Interaction<D>]) -> usize {
     let mut parent: Vec<usize> = (0..n).collect();
     fn root(p: &mut [usize], mut i: usize) -> usize {
         while p[i] != i {
@@ -789,7 +788,7 @@ fn clusters<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> usize {
         i
     }
     let mut count = n;
-    for c in sys.interactions() {
+    for c in inter {
         let (a, b) = (root(&mut parent, c.i), root(&mut parent, c.j));
         if a != b {
             parent[a] = b;
@@ -889,9 +888,6 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
                 }
             }
             checks = measure(sys, &criteria, f_ref, &step);
-            if aggregate {
-                checks.clusters = clusters(sys);
-            }
             if let Some(cb) = opts.progress.as_mut() {
                 cb(&Progress {
                     step_index: k,
@@ -1080,7 +1076,11 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(
         kinetic_per_grain: ke,
         free_spin_per_grain: ke_free / n,
         interactions: inter.len(),
-        clusters: 0,
+        clusters: if matches!(step, Step::Aggregate { .. }) {
+            clusters(sys.len(), &inter)
+        } else {
+            0
+        },
     }
 }
 

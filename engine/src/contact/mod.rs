@@ -43,16 +43,28 @@ pub struct PairForce<D: Dim> {
     pub rolling: D::Ang,
 }
 
-/// A contact (interaction) law.
-pub trait ContactLaw<D: Dim>: Copy + Send + Sync + std::fmt::Debug + 'static {
-    /// Per-pair history (tangential spring, rolling spring); `()` when there is none.
-    type History: Copy
+/// What a per-pair state (contact history, spring) must be: plain data, shared across
+/// threads, and saved in checkpoints.
+pub trait PairState:
+    Copy + Default + Send + Sync + std::fmt::Debug + serde::Serialize + serde::de::DeserializeOwned
+{
+}
+
+impl<T> PairState for T where
+    T: Copy
         + Default
         + Send
         + Sync
         + std::fmt::Debug
         + serde::Serialize
-        + serde::de::DeserializeOwned;
+        + serde::de::DeserializeOwned
+{
+}
+
+/// A contact (interaction) law.
+pub trait ContactLaw<D: Dim>: Copy + Send + Sync + std::fmt::Debug + 'static {
+    /// Per-pair history (tangential spring, rolling spring); `()` when there is none.
+    type History: PairState;
     /// Does the law exert moments (friction or rolling resistance)? If not, rotations are not
     /// integrated at all.
     const MOMENTS: bool;

@@ -2,17 +2,12 @@
 //! tangential displacement (Coulomb, AR07 (3), GRC07 (8)) and of the relative rolling rotation
 //! (GRC07 (10)). Each kind is a type, so an absent feature has no state and no cost.
 
+use super::PairState;
 use crate::geometry::{keep_norm_in_plane, Dim, Linear};
 
 /// Sliding friction between grains.
 pub trait Friction: Copy + Send + Sync + std::fmt::Debug + 'static {
-    type State<D: Dim>: Copy
-        + Default
-        + Send
-        + Sync
-        + std::fmt::Debug
-        + serde::Serialize
-        + serde::de::DeserializeOwned;
+    type State<D: Dim>: PairState;
     const ACTIVE: bool;
     /// Updates the elastic tangential force (exerted by i on j) and returns it.
     ///
@@ -143,13 +138,7 @@ impl Friction for NoSlip {
 
 /// Rolling resistance between grains (GRC07 (9)–(10)).
 pub trait RollingResistance: Copy + Send + Sync + std::fmt::Debug + 'static {
-    type State<D: Dim>: Copy
-        + Default
-        + Send
-        + Sync
-        + std::fmt::Debug
-        + serde::Serialize
-        + serde::de::DeserializeOwned;
+    type State<D: Dim>: PairState;
     const ACTIVE: bool;
     /// Updates the rolling moment exerted by i on j given the relative rolling rotation
     /// increment `dtheta` (ω_j − ω_i, rolling part, times dt) and returns it.
