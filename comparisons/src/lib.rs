@@ -31,8 +31,10 @@
 //! ```
 
 pub mod bond_order;
+pub mod decks;
 pub mod fixed_rattlers;
 pub mod force_distribution;
+pub mod import;
 pub mod metrics;
 mod neighbors;
 pub mod paper;

@@ -1187,3 +1187,42 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
         contacts,
     }
 }
+
+/// The common start of a cross-code comparison: the scene's initial grains with its leading
+/// hard-grain stages (melting, growth, expansion) applied, and the index of the first DEM
+/// stage. External codes have no event-driven dynamics, so their decks start here, from the
+/// very configuration our DEM stages start from.
+pub fn prepared_grains<D: Dim>(scene: &Scene) -> Result<(Grains<D>, usize), String> {
+    let mut ctx = Ctx::<D>::new(scene);
+    ctx.grains = initial_grains::<D>(scene)?;
+    let mut k = 0;
+    while k < ctx.stages.len() && !ctx.stages[k].1.is_dem() {
+        let step = ctx.stages[k].1.clone();
+        hard_stage(&mut ctx, k, &step).map_err(|e| e.to_string())?;
+        k += 1;
+    }
+    Ok((ctx.grains, k))
+}
+
+/// The time step our engine uses for `grains` at stiffness `kappa` (the scene's law with κ
+/// replaced): `dt_fraction` of the binary contact duration with the stiffest contact.
+pub fn time_step_for<D: Dim>(scene: &Scene, grains: &Grains<D>, kappa: f64) -> Result<f64, String> {
+    let factor = kappa / scene.law.kappa();
+    let dt = match &scene.law {
+        Law::HertzMindlin { .. } => {
+            let law = <HertzMindlin<Frictionless> as ContactLaw<D>>::with_kappa_scaled(
+                &hertz_mindlin_law(&scene.law, Frictionless),
+                factor,
+            );
+            time_step::<D, _>(scene, &system_of(scene, law, grains)?).0
+        }
+        Law::Linear { .. } => {
+            let law = <Linear<NoCohesion, Frictionless, NoRolling> as ContactLaw<D>>::with_kappa_scaled(
+                &linear_law(&scene.law, NoCohesion, Frictionless, NoRolling),
+                factor,
+            );
+            time_step::<D, _>(scene, &system_of(scene, law, grains)?).0
+        }
+    };
+    Ok(dt)
+}

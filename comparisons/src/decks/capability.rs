@@ -1,0 +1,293 @@
+//! The capability matrix: for each scene feature and each code, `exact`, `approximate` (with
+//! the deviation) or `unsupported` (with what is missing). Entries marked exact are checked by
+//! a two-particle deck test per code (`tests/externals.rs`); the sources are the codes'
+//! manuals and the observations in `shared/external-codes.md`.
+
+use super::{Code, StageKind, Start};
+use grainbench_engine::scene::{Law, Mu};
+
+/// How a code expresses a feature.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Support {
+    Exact,
+    Approximate(&'static str),
+    Unsupported(&'static str),
+}
+
+impl Support {
+    pub fn label(self) -> &'static str {
+        match self {
+            Support::Exact => "exact",
+            Support::Approximate(_) => "approximate",
+            Support::Unsupported(_) => "unsupported",
+        }
+    }
+    pub fn reason(self) -> &'static str {
+        match self {
+            Support::Exact => "",
+            Support::Approximate(r) | Support::Unsupported(r) => r,
+        }
+    }
+}
+
+/// A feature a scene may use (rows of the matrix).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Feature {
+    /// Hertz normal force N = (Ẽ√a/3) h^{3/2} (AR07 (1)).
+    HertzNormal,
+    /// K_T = (2−2ν)/(2−ν) K_N(h), incremental tangential force (AR07 (3)).
+    MindlinTangential,
+    /// T scaled down by the K_T ratio when N decreases (AR07 App. A).
+    MindlinUnloading,
+    /// Normal damping ζ of critical with α ∝ √(m K_N(h)) (AR07 (5)).
+    HertzDamping,
+    /// Linear K_N, K_T (GRC07 (4), (7)).
+    LinearSprings,
+    /// Linear normal dashpot ζ of critical (GRC07 (6)).
+    LinearDamping,
+    /// Coulomb cap |T| ≤ μ N_e on the elastic normal force (AR07 (4), GRC07 (8)).
+    Coulomb,
+    /// μ = ∞: contacts never slide.
+    NoSlip,
+    /// Contact pull −F0 and linear attraction over the gap D0 (GRC07 (4)–(5)).
+    Adhesion,
+    /// Rolling spring K_r with cap μ_r N_e (GRC07 (9)–(10)).
+    Rolling,
+    /// Tangential/rolling viscosity (grainbench option, not in GRC07).
+    TangentialDamping,
+    /// Disks in 2D.
+    Disks,
+    /// Polydisperse grains (GRC07: d uniform in [a/2, a]).
+    Polydisperse,
+    /// Stress-controlled periodic cell with a strain-rate cap (AR07 (6)–(8), (23); GRC08 I_a).
+    StressControl,
+    /// Fixed periodic cell.
+    FixedCell,
+    /// Stop when all grains form one cluster (GRC07 method 2).
+    OneClusterStop,
+    /// Several stages with pressure or κ changes (AR07 T.III QS, GRC07 series B, GRC08).
+    MultiStage,
+    /// Equilibrium criteria on forces, stress and kinetic energy (AR07 §III, GRC07 §II.D).
+    EquilibriumCriteria,
+    /// Hard-grain stages before the first DEM stage (melting, growth, expansion).
+    HardGrainPrelude,
+    /// Per-contact dump (pair, branch, N, T, rolling moment).
+    ContactDump,
+}
+
+impl Feature {
+    pub const ALL: [Feature; 20] = [
+        Feature::HertzNormal,
+        Feature::MindlinTangential,
+        Feature::MindlinUnloading,
+        Feature::HertzDamping,
+        Feature::LinearSprings,
+        Feature::LinearDamping,
+        Feature::Coulomb,
+        Feature::NoSlip,
+        Feature::Adhesion,
+        Feature::Rolling,
+        Feature::TangentialDamping,
+        Feature::Disks,
+        Feature::Polydisperse,
+        Feature::StressControl,
+        Feature::FixedCell,
+        Feature::OneClusterStop,
+        Feature::MultiStage,
+        Feature::EquilibriumCriteria,
+        Feature::HardGrainPrelude,
+        Feature::ContactDump,
+    ];
+
+    pub fn key(self) -> &'static str {
+        match self {
+            Feature::HertzNormal => "hertz-normal",
+            Feature::MindlinTangential => "mindlin-tangential",
+            Feature::MindlinUnloading => "mindlin-unloading",
+            Feature::HertzDamping => "hertz-damping",
+            Feature::LinearSprings => "linear-springs",
+            Feature::LinearDamping => "linear-damping",
+            Feature::Coulomb => "coulomb",
+            Feature::NoSlip => "no-slip",
+            Feature::Adhesion => "adhesion",
+            Feature::Rolling => "rolling-resistance",
+            Feature::TangentialDamping => "tangential-damping",
+            Feature::Disks => "disks-2d",
+            Feature::Polydisperse => "polydisperse",
+            Feature::StressControl => "stress-control",
+            Feature::FixedCell => "fixed-cell",
+            Feature::OneClusterStop => "one-cluster-stop",
+            Feature::MultiStage => "multi-stage",
+            Feature::EquilibriumCriteria => "equilibrium-criteria",
+            Feature::HardGrainPrelude => "hard-grain-prelude",
+            Feature::ContactDump => "contact-dump",
+        }
+    }
+
+    pub fn describe(self) -> &'static str {
+        match self {
+            Feature::HertzNormal => "Hertz normal force N = (Ẽ√a/3)h^3/2 (AR07 (1))",
+            Feature::MindlinTangential => "K_T = (2-2ν)/(2-ν) K_N(h), incremental T (AR07 (3))",
+            Feature::MindlinUnloading => "T scaled down with K_T when N drops (AR07 App. A)",
+            Feature::HertzDamping => "normal damping ζ of critical, α ∝ √(m K_N(h)) (AR07 (5))",
+            Feature::LinearSprings => "linear K_N, K_T (GRC07 (4), (7))",
+            Feature::LinearDamping => "linear normal dashpot, ζ of critical (GRC07 (6))",
+            Feature::Coulomb => "Coulomb |T| ≤ μ N_e on the elastic normal force",
+            Feature::NoSlip => "μ = ∞: contacts never slide",
+            Feature::Adhesion => "pull -F0 in contact, linear attraction over D0 (GRC07 (4)-(5))",
+            Feature::Rolling => "rolling spring K_r, cap μ_r N_e (GRC07 (9)-(10))",
+            Feature::TangentialDamping => "tangential/rolling viscosity (grainbench option)",
+            Feature::Disks => "2D disks",
+            Feature::Polydisperse => "diameters uniform in [d_min a, a]",
+            Feature::StressControl => "isotropic stress control with a strain-rate cap",
+            Feature::FixedCell => "fixed periodic cell",
+            Feature::OneClusterStop => "stop when all grains form one cluster (GRC07 method 2)",
+            Feature::MultiStage => "several DEM stages (pressure or κ programs)",
+            Feature::EquilibriumCriteria => "force, moment, stress and kinetic-energy criteria",
+            Feature::HardGrainPrelude => "hard-grain stages before the first DEM stage",
+            Feature::ContactDump => "per-contact dump: pair, branch, N, T, rolling moment",
+        }
+    }
+}
+
+/// The features `start` uses.
+pub fn features(start: &Start) -> Vec<Feature> {
+    let mut f = Vec::new();
+    let any_mu = |pred: &dyn Fn(Mu) -> bool| start.stages.iter().any(|s| pred(s.mu));
+    match start.law() {
+        Law::HertzMindlin { .. } => {
+            f.push(Feature::HertzNormal);
+            f.push(Feature::HertzDamping);
+            if any_mu(&|m| m.value() > 0.0) {
+                f.push(Feature::MindlinTangential);
+                f.push(Feature::MindlinUnloading);
+            }
+        }
+        Law::Linear {
+            zeta,
+            tangential_damping,
+            cohesion,
+            rolling,
+            ..
+        } => {
+            f.push(Feature::LinearSprings);
+            if *zeta > 0.0 {
+                f.push(Feature::LinearDamping);
+            }
+            if cohesion.is_some() {
+                f.push(Feature::Adhesion);
+            }
+            if rolling.is_some() {
+                f.push(Feature::Rolling);
+            }
+            if *tangential_damping > 0.0 {
+                f.push(Feature::TangentialDamping);
+            }
+        }
+    }
+    if any_mu(&|m| matches!(m, Mu::Finite(x) if x > 0.0)) {
+        f.push(Feature::Coulomb);
+    }
+    if any_mu(&|m| m == Mu::Infinite) {
+        f.push(Feature::NoSlip);
+    }
+    if start.dimension == 2 {
+        f.push(Feature::Disks);
+    }
+    if start.scene.particles.min_diameter < 1.0 {
+        f.push(Feature::Polydisperse);
+    }
+    let kinds = |pred: &dyn Fn(&StageKind) -> bool| start.stages.iter().any(|s| pred(&s.kind));
+    if kinds(&|k| matches!(k, StageKind::Compress { .. })) {
+        f.push(Feature::StressControl);
+    }
+    if kinds(&|k| matches!(k, StageKind::FixedVolume { .. } | StageKind::Aggregate)) {
+        f.push(Feature::FixedCell);
+    }
+    if kinds(&|k| matches!(k, StageKind::Aggregate)) {
+        f.push(Feature::OneClusterStop);
+    }
+    if start.stages.len() > 1 {
+        f.push(Feature::MultiStage);
+    }
+    f.push(Feature::EquilibriumCriteria);
+    if !start.prelude.is_empty() {
+        f.push(Feature::HardGrainPrelude);
+    }
+    f.push(Feature::ContactDump);
+    f.sort();
+    f.dedup();
+    f
+}
+
+/// The matrix.
+pub fn support(code: Code, f: Feature) -> Support {
+    use Feature as F;
+    use Support::*;
+    match code {
+        Code::Rust => Exact,
+        Code::Lammps => match f {
+            F::Coulomb => Approximate("Coulomb cap includes the damping (and table) normal force"),
+            F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
+            F::Adhesion => Unsupported("pair_style granular has no pull −F0 with a linear attraction range (a hybrid/overlay table per size class is not generated yet)"),
+            F::Rolling => Unsupported("rolling sds needs K_r/R_eff² and μ_r/R_eff per type pair; not generated yet for a continuous size distribution"),
+            F::TangentialDamping => Unsupported("tangential damping in `linear_history` is not generated"),
+            F::StressControl => Approximate("fix press/berendsen: strain rate ∝ stress error (capped only while P < 2P_target), no cell mass"),
+            F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::MultiStage => Approximate("each stage restarts the barostat; contact history carries over"),
+            F::EquilibriumCriteria => Approximate("kinetic energy of all grains (free spins included); criteria checked every check_every steps by fix halt"),
+            F::HardGrainPrelude => Approximate("run by grainbench's event-driven code: the data file holds the mixed configuration"),
+            _ => Exact,
+        },
+        Code::Liggghts => match f {
+            F::MindlinUnloading => Approximate("`tangential history` is a total-displacement law: T is not rescaled when N drops"),
+            F::HertzDamping => Approximate("restitution must lie in (0.05, 1]: ζ capped near 0.63"),
+            F::Coulomb => Approximate("Coulomb cap includes the damping normal force"),
+            F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
+            F::Adhesion => Unsupported("cohesion sjkr/sjkr2 give a force ∝ contact area, zero at first touch, with no range"),
+            F::Rolling => Unsupported("rolling_friction epsd3 not generated"),
+            F::TangentialDamping => Unsupported("no tangential damping option is generated"),
+            F::Disks => Unsupported("2D decks not generated for LIGGGHTS"),
+            F::StressControl => Approximate("no barostat fix: a servo of fix deform on the virial pressure, rate capped"),
+            F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::MultiStage => Approximate("each stage restarts the servo; contact history carries over"),
+            F::EquilibriumCriteria => Approximate("kinetic energy of all grains (free spins included); checked every check_every steps"),
+            F::HardGrainPrelude => Approximate("run by grainbench's event-driven code: the data file holds the mixed configuration"),
+            _ => Exact,
+        },
+        Code::Yade => match f {
+            F::MindlinUnloading => Approximate("Law2_ScGeom_MindlinPhys_Mindlin keeps T when N drops"),
+            F::Coulomb => Approximate("Coulomb cap uses the total normal force (viscous part included)"),
+            F::NoSlip => Approximate("friction angle 89.99°"),
+            F::LinearSprings | F::LinearDamping => Unsupported("Law2_ScGeom_FrictPhys_CundallStrack has no dashpot and ViscElPhys is wrong in a deforming periodic cell"),
+            F::Adhesion => Unsupported("CohFrictMat gives a spring to −F0 then constant −F0 (not generated)"),
+            F::Rolling => Unsupported("moment law not generated"),
+            F::TangentialDamping => Unsupported("no tangential damping option is generated"),
+            F::Disks => Unsupported("2D disks (blockedDOFs emulation) not generated"),
+            F::StressControl => Approximate("PeriTriaxController: stress servo with maxStrainRate, its own cell dynamics"),
+            F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::MultiStage => Approximate("each stage resets the controller goal"),
+            F::EquilibriumCriteria => Approximate("force, stress and kinetic criteria checked by a PyRunner every check_every steps"),
+            F::HardGrainPrelude => Approximate("run by grainbench's event-driven code: the data file holds the mixed configuration"),
+            _ => Exact,
+        },
+    }
+}
+
+/// The matrix as a Markdown table.
+pub fn markdown() -> String {
+    let mut s = String::from("| feature | lammps | liggghts | yade |\n| --- | --- | --- | --- |\n");
+    for f in Feature::ALL {
+        s.push_str(&format!("| `{}` {} |", f.key(), f.describe()));
+        for c in Code::EXTERNAL {
+            let sup = support(c, f);
+            if sup.reason().is_empty() {
+                s.push_str(&format!(" {} |", sup.label()));
+            } else {
+                s.push_str(&format!(" {}: {} |", sup.label(), sup.reason()));
+            }
+        }
+        s.push('\n');
+    }
+    s
+}

@@ -1,0 +1,437 @@
+//! Cross-code decks: input decks and data files for LAMMPS, LIGGGHTS and YADE that start from
+//! the configuration our engine starts from and run the same protocol, as far as each code can
+//! express it (SPEC §2–§4, `shared/external-codes.md`).
+//!
+//! * [`Start`]: the common start (grains after the scene's leading hard-grain stages, the DEM
+//!   stages with their absolute rate caps and tolerances, the time step), in reduced units:
+//!   lengths in a, masses in the mass of a grain of diameter a, forces in the scene's unit.
+//! * [`capability`]: the capability matrix, one [`Support`] per [`Feature`] and [`Code`].
+//! * [`lammps`], [`liggghts`], [`yade`]: one generator per code (one style, one file).
+//! * [`decks_for`]: every deck of a scene, refusing unsupported features with what is missing.
+
+pub mod capability;
+pub mod lammps;
+pub mod liggghts;
+pub mod yade;
+
+pub use capability::{features, Feature, Support};
+
+use grainbench_engine::geometry::{Dim, Linear as _, D2, D3};
+use grainbench_engine::run::{prepared_grains, time_step_for, Grains};
+use grainbench_engine::scene::{Criteria, ForceScale, Law, Mu, Scene, Step};
+use std::fmt;
+
+/// A DEM code grainbench can compare with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Code {
+    Rust,
+    Lammps,
+    Liggghts,
+    Yade,
+}
+
+impl Code {
+    pub const ALL: [Code; 4] = [Code::Rust, Code::Lammps, Code::Liggghts, Code::Yade];
+    pub const EXTERNAL: [Code; 3] = [Code::Lammps, Code::Liggghts, Code::Yade];
+
+    /// Name used on the command line, in directories and in golden files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Code::Rust => "rust",
+            Code::Lammps => "lammps",
+            Code::Liggghts => "liggghts",
+            Code::Yade => "yade",
+        }
+    }
+    pub fn parse(s: &str) -> Option<Code> {
+        Code::ALL.into_iter().find(|c| c.name() == s)
+    }
+    /// Executable looked up on `PATH`.
+    pub fn binary(self) -> &'static str {
+        match self {
+            Code::Rust => "grainbench",
+            Code::Lammps => "lmp",
+            Code::Liggghts => "liggghts",
+            Code::Yade => "yade",
+        }
+    }
+    /// How to install it on Debian (`ci/install-externals.sh` does all three).
+    pub fn install_hint(self) -> &'static str {
+        match self {
+            Code::Rust => "cargo install --path .",
+            Code::Lammps => "apt-get install -y --no-install-recommends lammps",
+            Code::Liggghts => "apt-get install -y --no-install-recommends liggghts",
+            Code::Yade => "apt-get install -y --no-install-recommends yade",
+        }
+    }
+}
+
+impl fmt::Display for Code {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// What a DEM stage asks of an external code, in absolute reduced units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stage {
+    pub kind: StageKind,
+    /// Largest strain rate of the cell, 1/time (AR07 (23) I·√(P/m)/a, GRC08 I_a/T0).
+    pub max_strain_rate: f64,
+    /// Time limit and the same in steps of [`Start::dt`].
+    pub max_time: f64,
+    pub max_steps: u64,
+    pub mu: Mu,
+    /// κ of the stage (the law's unless the stage overrides it).
+    pub kappa: f64,
+    /// Time step for this κ (our engine's: `dt_fraction` of the stiffest contact duration).
+    pub dt: f64,
+    pub tolerances: Tolerances,
+    /// Steps between checks of the criteria.
+    pub check_every: u64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StageKind {
+    /// Isotropic stress control to `pressure` (force unit / a^(d-1)).
+    Compress { pressure: f64 },
+    FixedVolume { full_time: bool },
+    Aggregate,
+}
+
+/// Equilibrium criteria in absolute units (SPEC §3): force on a grain, moment, deviation of
+/// each diagonal contact stress from the target, kinetic energy per grain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tolerances {
+    pub force: f64,
+    pub moment: f64,
+    pub stress: f64,
+    pub kinetic_per_grain: f64,
+}
+
+impl Tolerances {
+    /// The criteria of a stage at pressure `p` (`None`: fixed cell).
+    pub fn of(c: &Criteria, p: Option<f64>, dimension: usize) -> Tolerances {
+        let f_ref = match c.scale {
+            ForceScale::Pressure => p.unwrap_or(1.0),
+            ForceScale::Cohesion => p.unwrap_or(0.0).max(1.0),
+        };
+        let _ = dimension; // a = 1: F_ref/a^(d-1) = F_ref in reduced units.
+        Tolerances {
+            force: c.force * f_ref,
+            moment: c.moment * f_ref,
+            stress: c.pressure * f_ref,
+            kinetic_per_grain: c.kinetic * f_ref,
+        }
+    }
+}
+
+/// The common start of every code's run of a scene.
+#[derive(Clone, Debug)]
+pub struct Start {
+    pub scene: Scene,
+    pub dimension: usize,
+    /// Cell side lengths (a).
+    pub lengths: Vec<f64>,
+    /// Positions in [0, L) (a), velocities, diameters (a), masses (mass of a grain of
+    /// diameter a: m = d^dimension), moments of inertia (m d²/10 spheres, m d²/8 disks).
+    pub position: Vec<Vec<f64>>,
+    pub velocity: Vec<Vec<f64>>,
+    pub diameter: Vec<f64>,
+    pub mass: Vec<f64>,
+    pub inertia: Vec<f64>,
+    /// Hard-grain stages run by grainbench before the deck starts (kinds).
+    pub prelude: Vec<String>,
+    pub stages: Vec<Stage>,
+}
+
+/// Why a scene cannot be written for a code.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refusal {
+    pub code: Code,
+    pub scene: String,
+    pub missing: Vec<(Feature, String)>,
+}
+
+impl fmt::Display for Refusal {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(
+            f,
+            "scene {}: {} cannot run it: ",
+            self.scene,
+            self.code.name()
+        )?;
+        for (k, (feat, why)) in self.missing.iter().enumerate() {
+            if k > 0 {
+                f.write_str("; ")?;
+            }
+            write!(f, "{} unsupported ({why})", feat.key())?;
+        }
+        write!(
+            f,
+            ". See `grainbench capabilities`; pick a scene without these features."
+        )
+    }
+}
+
+impl std::error::Error for Refusal {}
+
+/// A generated deck: files to write into its directory and how to run it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Deck {
+    pub code: Code,
+    /// (file name, contents); the first is the input script.
+    pub files: Vec<(String, String)>,
+    /// The approximate features this deck uses, each with its deviation (also listed in the
+    /// input's header comment).
+    pub deviations: Vec<String>,
+    /// Arguments after the binary (the input script's name among them).
+    pub args: Vec<String>,
+}
+
+impl Start {
+    /// The common start of `scene`: runs its leading hard-grain stages with our event-driven
+    /// code, then lists the DEM stages that follow.
+    pub fn of(scene: &Scene) -> Result<Start, String> {
+        match scene.dimension {
+            2 => start_dim::<D2>(scene),
+            _ => start_dim::<D3>(scene),
+        }
+    }
+
+    pub fn n(&self) -> usize {
+        self.diameter.len()
+    }
+
+    /// The scene's law, in reduced units.
+    pub fn law(&self) -> &Law {
+        &self.scene.law
+    }
+
+    /// Solid fraction of the start.
+    pub fn packing_fraction(&self) -> f64 {
+        let d = self.dimension;
+        let solid: f64 = self
+            .diameter
+            .iter()
+            .map(|&x| {
+                if d == 2 {
+                    std::f64::consts::PI * x * x / 4.0
+                } else {
+                    std::f64::consts::PI * x * x * x / 6.0
+                }
+            })
+            .sum();
+        solid / self.lengths.iter().product::<f64>()
+    }
+
+    /// Does the scene's law carry attraction?
+    pub fn cohesive(&self) -> bool {
+        self.scene.law.cohesion().is_some()
+    }
+
+    /// Mass density giving m = d^dimension: 6/π per volume (spheres), 4/π per area (disks).
+    pub fn density(&self) -> f64 {
+        if self.dimension == 2 {
+            4.0 / std::f64::consts::PI
+        } else {
+            6.0 / std::f64::consts::PI
+        }
+    }
+}
+
+fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
+    let (grains, first_dem): (Grains<D>, usize) = prepared_grains::<D>(scene)?;
+    let stages_all = scene.stages();
+    let prelude = stages_all[..first_dem]
+        .iter()
+        .map(|(_, s)| s.kind().to_string())
+        .collect();
+    let cohesive = scene.law.cohesion().is_some();
+    let mut stages = Vec::new();
+    let mut pressure: Option<f64> = None;
+    for (_, step) in &stages_all[first_dem..] {
+        if !step.is_dem() {
+            return Err(format!(
+                "stage `{}` comes after a DEM stage: external codes have no event-driven \
+                 dynamics, and grainbench prepares hard-grain stages only before the first DEM stage",
+                step.kind()
+            ));
+        }
+        let kappa = step.kappa().unwrap_or(scene.law.kappa());
+        let dt = time_step_for::<D>(scene, &grains, kappa)?;
+        let (kind, cap) = match step {
+            Step::Compress {
+                pressure: p,
+                inertia_cap,
+                ..
+            } => {
+                pressure = Some(*p);
+                // AR07 (23): I = ε̇√(m/(aP)); GRC08: I_a = ε̇ T0 with T0 = 1 (cohesive units).
+                let time_unit = if cohesive { 1.0 } else { 1.0 / p.sqrt() };
+                (StageKind::Compress { pressure: *p }, inertia_cap / time_unit)
+            }
+            Step::FixedVolume { full_time, .. } => (
+                StageKind::FixedVolume {
+                    full_time: *full_time,
+                },
+                0.0,
+            ),
+            Step::Aggregate { .. } => (StageKind::Aggregate, 0.0),
+            other => unreachable!("stages() unrolls {}", other.kind()),
+        };
+        let max_time = step.max_time();
+        stages.push(Stage {
+            kind,
+            max_strain_rate: cap,
+            max_time,
+            max_steps: (max_time / dt).ceil() as u64,
+            mu: scene.mu_of(step),
+            kappa,
+            dt,
+            tolerances: Tolerances::of(&step.criteria(), pressure, D::D),
+            check_every: scene.numerics.check_every,
+        });
+    }
+    let n = grains.s.len();
+    let mass: Vec<f64> = grains
+        .diameter
+        .iter()
+        .map(|d| d.powi(D::D as i32))
+        .collect();
+    let inertia_factor = if D::D == 2 { 0.125 } else { 0.1 };
+    Ok(Start {
+        scene: scene.clone(),
+        dimension: D::D,
+        lengths: grains.l.to_vec(),
+        position: (0..n)
+            .map(|i| D::mul(grains.s[i], grains.l).to_vec())
+            .collect(),
+        velocity: grains.u.iter().map(|u| u.to_vec()).collect(),
+        inertia: mass
+            .iter()
+            .zip(&grains.diameter)
+            .map(|(m, d)| inertia_factor * m * d * d)
+            .collect(),
+        mass,
+        diameter: grains.diameter.clone(),
+        prelude,
+        stages,
+    })
+}
+
+/// The deck of `scene` for `code`, or why it cannot be written.
+pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
+    let feats = features(start);
+    let missing: Vec<(Feature, String)> = feats
+        .iter()
+        .filter_map(|f| match capability::support(code, *f) {
+            Support::Unsupported(why) => Some((*f, why.to_string())),
+            _ => None,
+        })
+        .collect();
+    if !missing.is_empty() {
+        return Err(Refusal {
+            code,
+            scene: start.scene.name.clone(),
+            missing,
+        });
+    }
+    let deviations: Vec<String> = feats
+        .iter()
+        .filter_map(|f| match capability::support(code, *f) {
+            Support::Approximate(why) => Some(format!("{}: {why}", f.key())),
+            _ => None,
+        })
+        .collect();
+    let mut deck = match code {
+        Code::Lammps => lammps::deck(start, &deviations),
+        Code::Liggghts => liggghts::deck(start, &deviations),
+        Code::Yade => yade::deck(start, &deviations),
+        Code::Rust => unreachable!("grainbench runs scenes, not decks"),
+    };
+    deck.code = code;
+    deck.deviations = deviations;
+    deck.files.push((
+        crate::import::Meta::FILE.into(),
+        serde_json::to_string_pretty(&start.meta(code)).expect("meta encodes") + "\n",
+    ));
+    Ok(deck)
+}
+
+impl Start {
+    /// What the final dumps of `code` do not say (written as `deck.json` beside the deck).
+    pub fn meta(&self, code: Code) -> crate::import::Meta {
+        let last = self.stages.last();
+        let pressure_target = self.stages.iter().rev().find_map(|s| match s.kind {
+            StageKind::Compress { pressure } => Some(pressure),
+            _ => None,
+        });
+        crate::import::Meta {
+            scene: self.scene.name.clone(),
+            code: code.name().into(),
+            dimension: self.dimension,
+            pressure_target,
+            cohesive: self.cohesive(),
+            mu: match last.map(|s| s.mu) {
+                Some(Mu::Infinite) => None,
+                Some(Mu::Finite(x)) => Some(x),
+                None => Some(0.0),
+            },
+            force_unit: if self.cohesive() {
+                "F0".into()
+            } else {
+                format!("P_ref a^{}", self.dimension - 1)
+            },
+            n: self.n(),
+        }
+    }
+}
+
+/// Header lines common to every deck (each code prefixes its comment marker).
+pub fn header_lines(start: &Start, code: Code, deviations: &[String]) -> Vec<String> {
+    let s = &start.scene;
+    let mut h = vec![
+        format!(
+            "grainbench deck for scene `{}` ({}), generated by grainbench {} — do not edit; rerun `grainbench decks {}`",
+            s.name,
+            code.name(),
+            env!("CARGO_PKG_VERSION"),
+            s.name
+        ),
+        s.description.clone(),
+        format!(
+            "N = {}, dimension {}, seed {}, start Φ = {:.6}, reduced units (a = 1, m(a) = 1, force unit {})",
+            start.n(),
+            start.dimension,
+            s.seed,
+            start.packing_fraction(),
+            if start.cohesive() { "F0" } else { "P_ref a^(d-1)" }
+        ),
+    ];
+    if !start.prelude.is_empty() {
+        h.push(format!(
+            "The data file holds the grains after the hard-grain stages run by grainbench: {}",
+            start.prelude.join(", ")
+        ));
+    }
+    if deviations.is_empty() {
+        h.push("Deviations from the grainbench law and protocol: none".into());
+    } else {
+        h.push("Deviations from the grainbench law and protocol:".into());
+        for d in deviations {
+            h.push(format!("  - {d}"));
+        }
+    }
+    h
+}
+
+/// Formats a float so that it reads back to the same value (shortest round-trip form).
+pub fn num(x: f64) -> String {
+    if x.is_infinite() {
+        return if x > 0.0 { "1e300".into() } else { "-1e300".into() };
+    }
+    let s = format!("{x:e}");
+    // `1e0` → `1`, keep mantissa/exponent otherwise.
+    s.strip_suffix("e0").map(str::to_string).unwrap_or(s)
+}

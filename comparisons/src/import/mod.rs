@@ -1,0 +1,347 @@
+//! Reading other codes' final states into our snapshot format, so that every metric is
+//! computed by the same `comparisons/` code for all codes (formats in
+//! `docs/external-formats.md`).
+//!
+//! * [`lammps`]: `dump custom` of the atoms + `dump local` of `compute pair/local` and
+//!   `compute property/local` (written by our LAMMPS decks).
+//! * [`liggghts`]: `dump custom` of the atoms + `dump local` of `compute pair/gran/local`.
+//! * [`yade`]: the text export our YADE scripts write (bodies, interactions, cell).
+//!
+//! Each reader returns [`Raw`] grains and contacts; [`assemble`] builds the snapshot (branch
+//! vectors and gaps from the positions, contact stress from the forces, AR07 (8)).
+
+pub mod lammps;
+pub mod liggghts;
+pub mod yade;
+
+use crate::decks::Code;
+use grainbench_engine::snapshot::{self, Snapshot};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// What a dump does not say: written by `grainbench decks` as `deck.json` beside each deck.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Meta {
+    pub scene: String,
+    pub code: String,
+    pub dimension: usize,
+    /// Target pressure of the last stage (`null`: fixed cell).
+    pub pressure_target: Option<f64>,
+    pub cohesive: bool,
+    /// Friction coefficient of the last stage (`null`: μ = ∞).
+    pub mu: Option<f64>,
+    pub force_unit: String,
+    pub n: usize,
+}
+
+impl Meta {
+    pub const FILE: &'static str = "deck.json";
+
+    pub fn read(dir: &Path) -> Result<Meta, ImportError> {
+        let path = dir.join(Meta::FILE);
+        let text = std::fs::read_to_string(&path).map_err(|e| ImportError::new(&path, e))?;
+        serde_json::from_str(&text).map_err(|e| ImportError::new(&path, e))
+    }
+}
+
+/// A reader's error: the file and what is wrong.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct ImportError {
+    pub path: PathBuf,
+    pub message: String,
+}
+
+impl ImportError {
+    pub fn new(path: &Path, message: impl std::fmt::Display) -> Self {
+        ImportError {
+            path: path.to_path_buf(),
+            message: message.to_string(),
+        }
+    }
+}
+
+/// Grains and contacts as a code wrote them, indices 0-based in the order of `position`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Raw {
+    /// Cell side lengths; the cell is `[origin, origin + L)`.
+    pub lengths: Vec<f64>,
+    pub origin: Vec<f64>,
+    pub position: Vec<Vec<f64>>,
+    pub velocity: Vec<Vec<f64>>,
+    pub angular_velocity: Vec<Vec<f64>>,
+    pub radius: Vec<f64>,
+    pub mass: Vec<f64>,
+    pub contacts: Vec<RawContact>,
+    pub time: f64,
+    pub step: u64,
+    /// `equilibrium`, `time-limit`, … as the deck recorded it (`imported` if unknown).
+    pub status: String,
+}
+
+/// One contact: i < j or not, the force on j is `normal`·n + `tangential` with n the unit
+/// vector from i to j.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RawContact {
+    pub i: usize,
+    pub j: usize,
+    /// Total normal force, repulsive positive.
+    pub normal: f64,
+    /// Elastic repulsive part, where the code gives it (else `normal` is used).
+    pub normal_elastic: Option<f64>,
+    /// Tangential force on j (empty: frictionless).
+    pub tangential: Vec<f64>,
+    /// Rolling moment on j (empty: none).
+    pub rolling: Vec<f64>,
+}
+
+/// Reads the final state a deck of `code` left in `dir`.
+pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Snapshot, ImportError> {
+    let raw = match code {
+        Code::Lammps => lammps::read_dir(dir, meta)?,
+        Code::Liggghts => liggghts::read_dir(dir, meta)?,
+        Code::Yade => yade::read_dir(dir, meta)?,
+        Code::Rust => {
+            return Snapshot::read(&dir.join("final.json"))
+                .map_err(|e| ImportError::new(dir, e))
+        }
+    };
+    assemble(raw, meta).map_err(|m| ImportError::new(dir, m))
+}
+
+/// Builds a snapshot: positions wrapped into `[0, L)`, branch vectors by the nearest image,
+/// gaps from the radii, contact stress σ_αβ = Σ f_α ℓ_β / Ω (AR07 (8)), kinetic stress.
+pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
+    let d = meta.dimension;
+    let n = raw.position.len();
+    if raw.lengths.len() < d {
+        return Err(format!("cell has {} lengths, dimension {d}", raw.lengths.len()));
+    }
+    if raw.radius.len() != n || raw.mass.len() != n {
+        return Err(format!(
+            "{} positions, {} radii, {} masses",
+            n,
+            raw.radius.len(),
+            raw.mass.len()
+        ));
+    }
+    let l: Vec<f64> = raw.lengths[..d].to_vec();
+    let origin: Vec<f64> = if raw.origin.len() >= d {
+        raw.origin[..d].to_vec()
+    } else {
+        vec![0.0; d]
+    };
+    let position: Vec<Vec<f64>> = raw
+        .position
+        .iter()
+        .map(|p| {
+            (0..d)
+                .map(|a| (p[a] - origin[a]).rem_euclid(l[a]))
+                .collect()
+        })
+        .collect();
+    let omega: f64 = l.iter().product();
+    let mut stress = vec![vec![0.0; d]; d];
+    let mut contacts = Vec::with_capacity(raw.contacts.len());
+    for c in &raw.contacts {
+        if c.i >= n || c.j >= n {
+            return Err(format!(
+                "contact ({}, {}) names a grain beyond the {n} read",
+                c.i, c.j
+            ));
+        }
+        let mut branch: Vec<f64> = (0..d)
+            .map(|a| {
+                let x = position[c.j][a] - position[c.i][a];
+                x - l[a] * (x / l[a]).round()
+            })
+            .collect();
+        let dist = branch.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if dist == 0.0 {
+            return Err(format!("contact ({}, {}) joins coincident grains", c.i, c.j));
+        }
+        let mut force: Vec<f64> = branch.iter().map(|x| c.normal * x / dist).collect();
+        for (a, t) in c.tangential.iter().take(d).enumerate() {
+            force[a] += t;
+        }
+        for a in 0..d {
+            for b in 0..d {
+                stress[a][b] += force[a] * branch[b] / omega;
+            }
+        }
+        // Keep the stored branch exact to the positions written.
+        branch.truncate(d);
+        contacts.push(snapshot::Contact {
+            i: c.i,
+            j: c.j,
+            gap: dist - raw.radius[c.i] - raw.radius[c.j],
+            branch,
+            normal: c.normal,
+            normal_elastic: c.normal_elastic.unwrap_or(c.normal),
+            tangential: if c.tangential.is_empty() {
+                Vec::new()
+            } else {
+                c.tangential[..d].to_vec()
+            },
+            rolling: c.rolling.clone(),
+        });
+    }
+    let mut kinetic = vec![vec![0.0; d]; d];
+    for (v, m) in raw.velocity.iter().zip(&raw.mass) {
+        for a in 0..d {
+            for b in 0..d {
+                kinetic[a][b] += m * v[a] * v[b] / omega;
+            }
+        }
+    }
+    let velocity = if raw.velocity.len() == n {
+        raw.velocity.iter().map(|v| v[..d].to_vec()).collect()
+    } else {
+        vec![vec![0.0; d]; n]
+    };
+    let snap = Snapshot {
+        format: snapshot::FORMAT.into(),
+        version: snapshot::VERSION,
+        code: meta.code.clone(),
+        scene: meta.scene.clone(),
+        dimension: d,
+        time: raw.time,
+        step: raw.step,
+        status: if raw.status.is_empty() {
+            "imported".into()
+        } else {
+            raw.status
+        },
+        force_unit: meta.force_unit.clone(),
+        pressure_target: meta.pressure_target,
+        cohesive: meta.cohesive,
+        mu: meta.mu,
+        cell: snapshot::Cell {
+            lengths: l,
+            contact_stress: stress,
+            kinetic_stress: kinetic,
+        },
+        particles: snapshot::Particles {
+            radius: raw.radius,
+            mass: raw.mass,
+            position,
+            velocity,
+            angular_velocity: raw.angular_velocity,
+        },
+        contacts,
+    };
+    snap.check()?;
+    Ok(snap)
+}
+
+/// Whitespace-separated numeric columns of a LAMMPS/LIGGGHTS dump section, located by the
+/// `ITEM: <name> <columns…>` header: returns (column names, rows, header values before it).
+pub struct DumpSection {
+    pub timestep: u64,
+    /// Box bounds (lo, hi) per axis.
+    pub bounds: Vec<(f64, f64)>,
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+}
+
+/// Parses the last frame of a LAMMPS-style dump (`ITEM: TIMESTEP`, `ITEM: BOX BOUNDS`, then
+/// `ITEM: ATOMS …` or `ITEM: ENTRIES …`).
+pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
+    let text = std::fs::read_to_string(path).map_err(|e| ImportError::new(path, e))?;
+    let start = text
+        .rfind("ITEM: TIMESTEP")
+        .ok_or_else(|| ImportError::new(path, "no `ITEM: TIMESTEP` line: not a LAMMPS-style dump"))?;
+    let mut lines = text[start..].lines().peekable();
+    let mut sec = DumpSection {
+        timestep: 0,
+        bounds: Vec::new(),
+        columns: Vec::new(),
+        rows: Vec::new(),
+    };
+    while let Some(line) = lines.next() {
+        if line.starts_with("ITEM: TIMESTEP") {
+            let v = lines
+                .next()
+                .ok_or_else(|| ImportError::new(path, "missing timestep value"))?;
+            sec.timestep = v
+                .trim()
+                .parse()
+                .map_err(|e| ImportError::new(path, format!("timestep {v:?}: {e}")))?;
+        } else if line.starts_with("ITEM: BOX BOUNDS") {
+            for _ in 0..3 {
+                let b = lines
+                    .next()
+                    .ok_or_else(|| ImportError::new(path, "box bounds cut short"))?;
+                let v: Vec<f64> = b
+                    .split_whitespace()
+                    .map(|x| x.parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|e| ImportError::new(path, format!("box bounds {b:?}: {e}")))?;
+                if v.len() < 2 {
+                    return Err(ImportError::new(path, format!("box bounds {b:?}")));
+                }
+                sec.bounds.push((v[0], v[1]));
+            }
+        } else if let Some(rest) = line
+            .strip_prefix("ITEM: ATOMS")
+            .or_else(|| line.strip_prefix("ITEM: ENTRIES"))
+        {
+            sec.columns = rest.split_whitespace().map(str::to_string).collect();
+            for row in lines.by_ref() {
+                if row.starts_with("ITEM:") {
+                    break;
+                }
+                if row.trim().is_empty() {
+                    continue;
+                }
+                let v: Vec<f64> = row
+                    .split_whitespace()
+                    .map(|x| x.parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|e| ImportError::new(path, format!("row {row:?}: {e}")))?;
+                if v.len() != sec.columns.len() {
+                    return Err(ImportError::new(
+                        path,
+                        format!(
+                            "row {row:?} has {} values for {} columns",
+                            v.len(),
+                            sec.columns.len()
+                        ),
+                    ));
+                }
+                sec.rows.push(v);
+            }
+            break;
+        }
+    }
+    if sec.columns.is_empty() {
+        return Err(ImportError::new(
+            path,
+            "no `ITEM: ATOMS` or `ITEM: ENTRIES` section in the last frame",
+        ));
+    }
+    Ok(sec)
+}
+
+impl DumpSection {
+    /// Index of a column, or an error naming the columns present.
+    pub fn col(&self, path: &Path, name: &str) -> Result<usize, ImportError> {
+        self.columns.iter().position(|c| c == name).ok_or_else(|| {
+            ImportError::new(
+                path,
+                format!(
+                    "no column `{name}` (columns: {})",
+                    self.columns.join(" ")
+                ),
+            )
+        })
+    }
+}
+
+/// Reads a one-word status file a deck writes at its end (`equilibrium`, `time-limit`).
+pub fn read_status(path: &Path) -> String {
+    std::fs::read_to_string(path)
+        .map(|s| s.split_whitespace().last().unwrap_or("imported").to_string())
+        .unwrap_or_else(|_| "imported".into())
+}
