@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 mod reproduce;
+mod xcode;
 
 /// Set by the first Ctrl-C (or SIGTERM): runs stop cleanly at their next check.
 static STOP: AtomicBool = AtomicBool::new(false);
@@ -61,6 +62,24 @@ enum Command {
     },
     /// List the embedded scenes.
     Scenes,
+    /// Write LAMMPS, LIGGGHTS and YADE decks (input + data file of the same initial
+    /// configuration) of a scene into `reference-inputs/<scene>/<code>/`.
+    Decks {
+        /// Scene files or embedded scene names.
+        scenes: Vec<String>,
+        /// Every embedded scene.
+        #[arg(long)]
+        all: bool,
+        /// Codes, comma-separated (default: lammps,liggghts,yade).
+        #[arg(long, value_delimiter = ',')]
+        codes: Vec<String>,
+        /// Output directory instead of `reference-inputs/<scene>/` (one scene only).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
+    /// Print the capability matrix: how each external code expresses each scene feature
+    /// (`exact`, `approximate` with the deviation, `unsupported`); with a scene, only its features.
+    Capabilities { scene: Option<String> },
     /// Run a paper's state at paper size over several seeds and compare every metric with the
     /// published values (table in Markdown/CSV/JSON, P(f) and g(r) plots). Interrupted runs
     /// continue where they stopped when the same command is given again.
@@ -173,6 +192,13 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 },
             })
         }
+        Command::Decks {
+            scenes,
+            all,
+            codes,
+            out,
+        } => xcode::decks_command(&scenes, all, &codes, out),
+        Command::Capabilities { scene } => xcode::capabilities_command(scene.as_deref()),
         Command::Scenes => {
             for (name, text) in library::SCENES {
                 let scene = Scene::from_toml(text, Path::new(name))?;

@@ -9,6 +9,7 @@ macro_rules! scenes {
 /// (name, TOML text) of every embedded scene; `default` is what a bare `grainbench run` runs.
 pub const SCENES: &[(&str, &str)] = scenes!(
     "default",
+    "xcode-smoke",
     "ar07-A",
     "ar07-A-ci",
     "ar07-Aprime",

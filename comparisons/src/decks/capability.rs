@@ -236,7 +236,6 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::MultiStage => Approximate("each stage restarts the barostat; contact history carries over"),
             F::EquilibriumCriteria => Approximate("kinetic energy of all grains (free spins included); criteria checked every check_every steps by fix halt"),
-            F::HardGrainPrelude => Approximate("run by grainbench's event-driven code: the data file holds the mixed configuration"),
             _ => Exact,
         },
         Code::Liggghts => match f {
@@ -252,7 +251,6 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::MultiStage => Approximate("each stage restarts the servo; contact history carries over"),
             F::EquilibriumCriteria => Approximate("kinetic energy of all grains (free spins included); checked every check_every steps"),
-            F::HardGrainPrelude => Approximate("run by grainbench's event-driven code: the data file holds the mixed configuration"),
             _ => Exact,
         },
         Code::Yade => match f {
@@ -268,7 +266,6 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::MultiStage => Approximate("each stage resets the controller goal"),
             F::EquilibriumCriteria => Approximate("force, stress and kinetic criteria checked by a PyRunner every check_every steps"),
-            F::HardGrainPrelude => Approximate("run by grainbench's event-driven code: the data file holds the mixed configuration"),
             _ => Exact,
         },
     }

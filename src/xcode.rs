@@ -1,0 +1,118 @@
+//! `grainbench decks`, `capabilities`: the cross-code decks of a scene.
+
+use anyhow::{bail, Context, Result};
+use grainbench_comparisons::decks::{self, capability, Code, Deck, Start};
+use grainbench_engine::snapshot::write_atomic;
+use std::path::{Path, PathBuf};
+
+/// Parses `--codes a,b,c`.
+pub fn parse_codes(list: &[String], allow_rust: bool) -> Result<Vec<Code>> {
+    let mut out = Vec::new();
+    for name in list {
+        match Code::parse(name) {
+            Some(Code::Rust) if !allow_rust => {
+                bail!("--codes: `rust` has no deck (grainbench runs the scene itself)")
+            }
+            Some(c) => {
+                if !out.contains(&c) {
+                    out.push(c)
+                }
+            }
+            None => bail!(
+                "--codes: unknown code `{name}`; expected a comma-separated list of rust, lammps, liggghts, yade"
+            ),
+        }
+    }
+    Ok(out)
+}
+
+/// Writes the decks of `start` for `codes` into `root/<code>/`; refusals are reported and
+/// skipped. Returns the written decks.
+pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> Result<Vec<Deck>> {
+    let mut written = Vec::new();
+    for &code in codes {
+        match decks::deck(start, code) {
+            Ok(deck) => {
+                let dir = root.join(code.name());
+                for (name, text) in &deck.files {
+                    let path = dir.join(name);
+                    write_atomic(&path, text.as_bytes())
+                        .with_context(|| format!("writing {}", path.display()))?;
+                }
+                if !quiet {
+                    println!(
+                        "{}: {} ({} file(s){})",
+                        code,
+                        dir.display(),
+                        deck.files.len(),
+                        if deck.deviations.is_empty() {
+                            String::new()
+                        } else {
+                            format!(", {} approximate feature(s)", deck.deviations.len())
+                        }
+                    );
+                }
+                written.push(deck);
+            }
+            Err(refusal) => eprintln!("{code}: not written: {refusal}"),
+        }
+    }
+    Ok(written)
+}
+
+/// `grainbench decks`.
+pub fn decks_command(scenes: &[String], all: bool, codes: &[String], out: Option<PathBuf>) -> Result<i32> {
+    let codes = if codes.is_empty() {
+        Code::EXTERNAL.to_vec()
+    } else {
+        parse_codes(codes, false)?
+    };
+    let names: Vec<String> = if all {
+        grainbench_engine::library::SCENES
+            .iter()
+            .map(|(n, _)| n.to_string())
+            .collect()
+    } else if scenes.is_empty() {
+        bail!("name a scene (`grainbench scenes` lists them) or pass --all")
+    } else {
+        scenes.to_vec()
+    };
+    if out.is_some() && names.len() > 1 {
+        bail!("--out takes one scene; without it each scene goes to reference-inputs/<scene>/");
+    }
+    for name in &names {
+        let scene = crate::load_scene(name)?;
+        let start = Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
+        let root = out
+            .clone()
+            .unwrap_or_else(|| Path::new("reference-inputs").join(&scene.name));
+        write_decks(&start, &codes, &root, false)?;
+    }
+    Ok(0)
+}
+
+/// `grainbench capabilities`.
+pub fn capabilities_command(scene: Option<&str>) -> Result<i32> {
+    match scene {
+        None => print!("{}", capability::markdown()),
+        Some(spec) => {
+            let scene = crate::load_scene(spec)?;
+            let start = Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
+            println!("scene {} uses:", scene.name);
+            println!("| feature | lammps | liggghts | yade |\n| --- | --- | --- | --- |");
+            for f in decks::features(&start) {
+                print!("| `{}` |", f.key());
+                for c in Code::EXTERNAL {
+                    let s = capability::support(c, f);
+                    if s.reason().is_empty() {
+                        print!(" {} |", s.label());
+                    } else {
+                        print!(" {}: {} |", s.label(), s.reason());
+                    }
+                }
+                println!();
+            }
+        }
+    }
+    Ok(0)
+}
