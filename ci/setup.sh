@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # What the tests need on a fresh Debian machine: a Rust toolchain with rustfmt and clippy.
-# (The external DEM codes are not needed yet; see ci/ once the cross-code harness lands.)
+# (The external DEM codes come from ci/install-externals.sh.)
 set -euo pipefail
 if ! command -v cargo >/dev/null 2>&1; then
   if command -v apt-get >/dev/null 2>&1; then

@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
+mod compare;
 mod reproduce;
 mod xcode;
 
@@ -52,6 +53,9 @@ enum Command {
         /// check. The checkpoint is removed when the run completes.
         #[arg(long, default_value_t = 60.0, value_name = "SECS")]
         checkpoint_every: f64,
+        /// Seed of the initial state instead of the scene's.
+        #[arg(long)]
+        seed: Option<u64>,
     },
     /// Packing metrics of a snapshot: Φ, z, z*, x0, force moments, AR07 (22) / GRC07 (18) checks.
     Analyze {
@@ -76,6 +80,40 @@ enum Command {
         /// Output directory instead of `reference-inputs/<scene>/` (one scene only).
         #[arg(long, short)]
         out: Option<PathBuf>,
+    },
+    /// Run a scene in our engine and in LAMMPS, LIGGGHTS and YADE from the same start, and
+    /// compare every metric with the paper, the golden values and each other (Markdown table,
+    /// CSV, JSON, overlaid P(f) and g(r)). Exit status 1 when a check fails. Bare `grainbench`
+    /// runs `compare xcode-smoke`.
+    Compare {
+        /// Scene file or embedded scene name.
+        scene: String,
+        /// Codes, comma-separated (default: rust,lammps,liggghts,yade).
+        #[arg(long, value_delimiter = ',')]
+        codes: Vec<String>,
+        /// Output directory (default: `runs/compare/<scene>`).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Wall-time limit of each external run, seconds.
+        #[arg(long, default_value_t = 3600.0, value_name = "SECS")]
+        time_limit: f64,
+        /// Run LAMMPS and LIGGGHTS under `mpirun -np K`.
+        #[arg(long, value_name = "K")]
+        np: Option<usize>,
+        /// Worker threads of our engine.
+        #[arg(long, short = 'j')]
+        threads: Option<usize>,
+        /// Every metric in the terminal table (the files always have all).
+        #[arg(long)]
+        all_metrics: bool,
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Golden values: `grainbench golden update SCENE` records the last `compare` run of the
+    /// scene as golden/<scene>/<code>.json (only when asked: nothing else writes them).
+    Golden {
+        #[command(subcommand)]
+        action: GoldenAction,
     },
     /// Print the capability matrix: how each external code expresses each scene feature
     /// (`exact`, `approximate` with the deviation, `unsupported`); with a scene, only its features.
@@ -116,6 +154,20 @@ enum Command {
     },
 }
 
+#[derive(Subcommand)]
+enum GoldenAction {
+    /// Record the results of the last `grainbench compare SCENE`.
+    Update {
+        scene: String,
+        /// Only these codes (default: every code that ran).
+        #[arg(long, value_delimiter = ',')]
+        codes: Vec<String>,
+        /// The compare output directory (default: `runs/compare/<scene>`).
+        #[arg(long)]
+        from: Option<PathBuf>,
+    },
+}
+
 fn main() {
     let cli = Cli::parse();
     let code = match dispatch(cli) {
@@ -129,15 +181,41 @@ fn main() {
 }
 
 fn dispatch(cli: Cli) -> Result<i32> {
-    match cli.command.unwrap_or(Command::Run {
-        scene: None,
+    match cli.command.unwrap_or(Command::Compare {
+        scene: DEFAULT_COMPARE.into(),
+        codes: Vec::new(),
         out: None,
+        time_limit: 3600.0,
+        np: None,
         threads: None,
+        all_metrics: false,
         quiet: false,
-        require_equilibrium: false,
-        resume: false,
-        checkpoint_every: 60.0,
     }) {
+        Command::Compare {
+            scene,
+            codes,
+            out,
+            time_limit,
+            np,
+            threads,
+            all_metrics,
+            quiet,
+        } => {
+            set_threads(threads)?;
+            install_stop_handler();
+            compare::compare(&compare::Args {
+                scene,
+                codes,
+                out,
+                time_limit,
+                np,
+                quiet,
+                all_metrics,
+            })
+        }
+        Command::Golden {
+            action: GoldenAction::Update { scene, codes, from },
+        } => compare::golden_update(&scene, &codes, from, None),
         Command::Run {
             scene,
             out,
@@ -146,14 +224,19 @@ fn dispatch(cli: Cli) -> Result<i32> {
             require_equilibrium,
             resume,
             checkpoint_every,
+            seed,
         } => {
             set_threads(threads)?;
             let flags = RunFlags {
                 quiet,
+                report: true,
                 resume,
                 checkpoint_every,
             };
-            let (scene, out) = scene_and_out(scene.as_deref(), out, resume)?;
+            let (mut scene, out) = scene_and_out(scene.as_deref(), out, resume)?;
+            if let Some(s) = seed {
+                scene.seed = s;
+            }
             let (code, outcome) = run(&scene, &out, &flags)?;
             if let Some(o) = outcome {
                 if code == 0 && require_equilibrium && !o.equilibrated() {
@@ -187,6 +270,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 max_time,
                 flags: RunFlags {
                     quiet,
+                    report: true,
                     resume: false,
                     checkpoint_every,
                 },
@@ -235,6 +319,8 @@ pub(crate) fn load_scene(spec: &str) -> Result<Scene> {
 #[derive(Clone)]
 pub(crate) struct RunFlags {
     pub(crate) quiet: bool,
+    /// Print the metrics table of the final state.
+    pub(crate) report: bool,
     pub(crate) resume: bool,
     pub(crate) checkpoint_every: f64,
 }
@@ -298,15 +384,7 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
     }
     std::fs::create_dir_all(out)
         .with_context(|| format!("creating the output directory {}", out.display()))?;
-    static HANDLER: std::sync::Once = std::sync::Once::new();
-    HANDLER.call_once(|| {
-        // A second Ctrl-C kills at once; the first one stops cleanly at the next check.
-        let _ = ctrlc::set_handler(|| {
-            if STOP.swap(true, Ordering::SeqCst) {
-                std::process::exit(130);
-            }
-        });
-    });
+    install_stop_handler();
     let stop = &STOP;
     eprintln!(
         "grainbench {}: scene {} ({}D, N = {}, {} threads) → {}",
@@ -471,10 +549,12 @@ pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, O
             outcome.contacts_at_threshold
         );
     }
-    print!(
-        "{}",
-        grainbench_comparisons::report::to_markdown(&analysis_of(&outcome.snapshot))
-    );
+    if flags.report {
+        print!(
+            "{}",
+            grainbench_comparisons::report::to_markdown(&analysis_of(&outcome.snapshot))
+        );
+    }
     println!("snapshot   {}", snap_path.display());
     println!("wall time  {:.1} s", outcome.wall_seconds);
     if outcome.snapshot.status == "interrupted" {
@@ -504,6 +584,22 @@ fn pressure_text(c: &grainbench_engine::run::Checks) -> String {
     } else {
         format!("P={:.3e}", c.pressure)
     }
+}
+
+/// The scene bare `grainbench` compares across codes.
+const DEFAULT_COMPARE: &str = "xcode-smoke";
+
+/// Ctrl-C / SIGTERM: the first stops runs cleanly at their next check (external codes are
+/// killed, logs kept); a second one exits at once.
+fn install_stop_handler() {
+    static HANDLER: std::sync::Once = std::sync::Once::new();
+    HANDLER.call_once(|| {
+        let _ = ctrlc::set_handler(|| {
+            if STOP.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    });
 }
 
 fn analysis_of(snap: &Snapshot) -> grainbench_comparisons::metrics::Analysis {

@@ -276,7 +276,7 @@ fn record(
     Ok(path)
 }
 
-fn points(xy: Option<(&Vec<f64>, &Vec<f64>)>) -> Vec<(f64, f64)> {
+pub(crate) fn points(xy: Option<(&Vec<f64>, &Vec<f64>)>) -> Vec<(f64, f64)> {
     xy.map(|(x, y)| x.iter().copied().zip(y.iter().copied()).collect())
         .unwrap_or_default()
 }

@@ -31,6 +31,7 @@
 //! ```
 
 pub mod bond_order;
+pub mod crosscode;
 pub mod decks;
 pub mod fixed_rattlers;
 pub mod force_distribution;

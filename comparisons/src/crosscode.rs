@@ -1,0 +1,412 @@
+//! The cross-code table: every metric of every code's final packing, against the paper value,
+//! the golden (recorded) values and our engine, with the stated tolerances
+//! (`golden/xcode-bands.toml`).
+
+use crate::decks::Code;
+use crate::paper;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Metrics shown in the terminal table (the files carry all of them).
+pub const TABLE_METRICS: &[&str] = &[
+    "phi", "z", "z_star", "x0", "pressure", "Z2", "X1", "M1", "M2", "Q6", "z_plus", "z_minus",
+];
+
+/// What became of one code's run.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CodeResult {
+    pub code: String,
+    /// `ran`, `missing` (binary not found), `refused` (scene not expressible), `failed`,
+    /// `timeout`, `interrupted`.
+    pub outcome: String,
+    /// Status of the final state (`equilibrium`, `time-limit`, …) when it ran.
+    pub status: Option<String>,
+    /// Version line of the code.
+    pub version: Option<String>,
+    pub wall_seconds: Option<f64>,
+    /// What went wrong, or the install command when missing.
+    pub message: Option<String>,
+    /// Approximate features of the deck.
+    pub deviations: Vec<String>,
+    pub metrics: BTreeMap<String, f64>,
+    /// Mean of the recorded golden values (`golden/<scene>/<code>.json`), if any.
+    pub golden: BTreeMap<String, f64>,
+    /// Target of the last stage and the allowed deviation of the contact-stress pressure.
+    pub pressure_target: Option<f64>,
+    pub pressure_tolerance: Option<f64>,
+}
+
+/// Cross-code tolerance of one metric: |code − rust| ≤ k·√2·spread.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Band {
+    /// Sample s.d. of our engine's value over seeds of the scene.
+    pub spread: f64,
+    /// Seeds behind `spread`.
+    pub seeds: u32,
+}
+
+/// `golden/xcode-bands.toml`: scene → metric → band, and the multiplier k.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Bands {
+    /// Multiplier of √2·spread (two independent samples differ by √2 s.d.).
+    pub k: f64,
+    pub scenes: BTreeMap<String, BTreeMap<String, Band>>,
+}
+
+impl Bands {
+    pub const FILE: &'static str = "golden/xcode-bands.toml";
+    pub const TEXT: &'static str = include_str!("../../golden/xcode-bands.toml");
+
+    pub fn embedded() -> Bands {
+        toml::from_str(Self::TEXT).expect("golden/xcode-bands.toml parses (tested)")
+    }
+    /// Allowed |code − rust| for `metric` in `scene`.
+    pub fn tolerance(&self, scene: &str, metric: &str) -> Option<f64> {
+        self.scenes
+            .get(scene)
+            .and_then(|m| m.get(metric))
+            .map(|b| self.k * std::f64::consts::SQRT_2 * b.spread)
+    }
+}
+
+/// One row of the table.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Row {
+    pub metric: String,
+    pub paper: Option<f64>,
+    pub paper_sd: Option<f64>,
+    pub reference: Option<String>,
+    /// Allowed |code − rust| (cross-code band), if stated.
+    pub tolerance: Option<f64>,
+    pub values: BTreeMap<String, f64>,
+    pub golden: BTreeMap<String, f64>,
+    /// (value − paper)/paper s.d. per code.
+    pub paper_sigma: BTreeMap<String, f64>,
+    /// (value − rust)/(√2·spread) per code.
+    pub rust_sigma: BTreeMap<String, f64>,
+}
+
+/// The whole comparison.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Comparison {
+    pub scene: String,
+    pub n: usize,
+    pub paper_state: Option<String>,
+    pub codes: Vec<CodeResult>,
+    pub rows: Vec<Row>,
+    /// Every check that failed, in words.
+    pub failures: Vec<String>,
+}
+
+/// Reads the mean metrics of `golden/<scene>/<code>.json` (any number of seeds).
+pub fn golden_metrics(root: &Path, scene: &str, code: &str) -> BTreeMap<String, f64> {
+    let path = root.join("golden").join(scene).join(format!("{code}.json"));
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return BTreeMap::new();
+    };
+    let Ok(doc) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return BTreeMap::new();
+    };
+    let mut sums: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+    for seed in doc["seeds"].as_array().into_iter().flatten() {
+        if let Some(m) = seed["metrics"].as_object() {
+            for (k, v) in m {
+                if let Some(x) = v.as_f64() {
+                    let e = sums.entry(k.clone()).or_insert((0.0, 0));
+                    e.0 += x;
+                    e.1 += 1;
+                }
+            }
+        }
+    }
+    sums.into_iter()
+        .map(|(k, (s, n))| (k, s / n as f64))
+        .collect()
+}
+
+/// Builds the rows and the failed checks.
+pub fn build(
+    scene: &str,
+    n: usize,
+    paper_state: Option<&str>,
+    codes: Vec<CodeResult>,
+    bands: &Bands,
+) -> Comparison {
+    let published = paper_state.and_then(paper::paper_values);
+    let mut keys: Vec<String> = codes
+        .iter()
+        .flat_map(|c| c.metrics.keys().chain(c.golden.keys()).cloned())
+        .collect();
+    keys.sort_by_key(|k| (paper::metric_order(k), k.clone()));
+    keys.dedup();
+    let rust = codes.iter().find(|c| c.code == Code::Rust.name());
+    let mut failures = Vec::new();
+    let mut rows = Vec::new();
+    for key in keys {
+        let p = published.and_then(|s| s.values.get(&key));
+        let tolerance = bands.tolerance(scene, &key);
+        let spread = bands.scenes.get(scene).and_then(|m| m.get(&key)).map(|b| b.spread);
+        let mut row = Row {
+            metric: key.clone(),
+            paper: p.map(|v| v.value),
+            paper_sd: p.and_then(|v| v.sd),
+            reference: p.map(|v| v.reference.clone()),
+            tolerance,
+            values: BTreeMap::new(),
+            golden: BTreeMap::new(),
+            paper_sigma: BTreeMap::new(),
+            rust_sigma: BTreeMap::new(),
+        };
+        let ours = rust.and_then(|r| r.metrics.get(&key)).copied();
+        for c in &codes {
+            if let Some(g) = c.golden.get(&key) {
+                row.golden.insert(c.code.clone(), *g);
+            }
+            let Some(&v) = c.metrics.get(&key) else {
+                continue;
+            };
+            row.values.insert(c.code.clone(), v);
+            if let (Some(pv), Some(sd)) = (row.paper, row.paper_sd) {
+                if sd > 0.0 {
+                    row.paper_sigma.insert(c.code.clone(), (v - pv) / sd);
+                }
+            }
+            if let (Some(o), Some(s)) = (ours, spread) {
+                if c.code != Code::Rust.name() && s > 0.0 {
+                    row.rust_sigma
+                        .insert(c.code.clone(), (v - o) / (std::f64::consts::SQRT_2 * s));
+                    if let Some(t) = tolerance {
+                        if (v - o).abs() > t {
+                            failures.push(format!(
+                                "{}: {key} = {v:.6} differs from rust ({o:.6}) by {:.3e} > tolerance {t:.3e} ({} × √2 × seed spread {s:.3e})",
+                                c.code,
+                                (v - o).abs(),
+                                bands.k
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        rows.push(row);
+    }
+    for c in &codes {
+        match c.outcome.as_str() {
+            "ran" => {
+                if c.status.as_deref() != Some("equilibrium") {
+                    failures.push(format!(
+                        "{}: final state is `{}`, not `equilibrium`",
+                        c.code,
+                        c.status.as_deref().unwrap_or("?")
+                    ));
+                }
+                if let (Some(t), Some(tol), Some(p)) =
+                    (c.pressure_target, c.pressure_tolerance, c.metrics.get("pressure"))
+                {
+                    if (p - t).abs() > tol {
+                        failures.push(format!(
+                            "{}: contact-stress pressure {p:.6} misses the target {t} by {:.2e} > criterion {tol:.2e}",
+                            c.code,
+                            (p - t).abs()
+                        ));
+                    }
+                }
+            }
+            "missing" | "refused" => {}
+            other => failures.push(format!(
+                "{}: {other}{}",
+                c.code,
+                c.message
+                    .as_deref()
+                    .map(|m| format!(": {m}"))
+                    .unwrap_or_default()
+            )),
+        }
+    }
+    Comparison {
+        scene: scene.into(),
+        n,
+        paper_state: paper_state.map(String::from),
+        codes,
+        rows,
+        failures,
+    }
+}
+
+fn fmt(x: f64) -> String {
+    if x == 0.0 {
+        "0".into()
+    } else if x.abs() >= 1e-3 && x.abs() < 1e4 {
+        format!("{x:.4}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+impl Comparison {
+    /// Markdown: one column per code; each cell `value [golden] (Δ/σ_paper; Δ/σ_seeds vs rust)`.
+    pub fn to_markdown(&self, all_metrics: bool) -> String {
+        let mut s = format!("## {} (N = {})\n\n", self.scene, self.n);
+        s.push_str("| code | outcome | status | wall s | version |\n| --- | --- | --- | --- | --- |\n");
+        for c in &self.codes {
+            s.push_str(&format!(
+                "| {} | {} | {} | {} | {} |\n",
+                c.code,
+                c.outcome,
+                c.status.as_deref().unwrap_or("–"),
+                c.wall_seconds.map(|w| format!("{w:.1}")).unwrap_or("–".into()),
+                c.version.as_deref().or(c.message.as_deref()).unwrap_or("–")
+            ));
+        }
+        s.push_str("\nCells: value [golden] (Δ paper in paper s.d.; Δ rust in units of √2 × our seed-to-seed s.d.). `*` marks a value outside its tolerance.\n\n");
+        s.push_str("| metric | paper |");
+        for c in &self.codes {
+            s.push_str(&format!(" {} |", c.code));
+        }
+        s.push_str(" tolerance vs rust |\n| --- | --- |");
+        for _ in &self.codes {
+            s.push_str(" --- |");
+        }
+        s.push_str(" --- |\n");
+        for r in &self.rows {
+            if !all_metrics && !TABLE_METRICS.contains(&r.metric.as_str()) {
+                continue;
+            }
+            let paper = match (r.paper, r.paper_sd) {
+                (Some(v), Some(sd)) => format!("{} ± {} ({})", fmt(v), fmt(sd), r.reference.as_deref().unwrap_or("")),
+                (Some(v), None) => format!("{} ({})", fmt(v), r.reference.as_deref().unwrap_or("")),
+                _ => "–".into(),
+            };
+            s.push_str(&format!("| {} | {} |", r.metric, paper));
+            let ours = r.values.get(Code::Rust.name());
+            for c in &self.codes {
+                let mut cell = match r.values.get(&c.code) {
+                    Some(v) => fmt(*v),
+                    None => "–".into(),
+                };
+                if let Some(g) = r.golden.get(&c.code) {
+                    cell.push_str(&format!(" [{}]", fmt(*g)));
+                }
+                let mut notes = Vec::new();
+                if let Some(z) = r.paper_sigma.get(&c.code) {
+                    notes.push(format!("{z:+.1}σp"));
+                }
+                if let Some(z) = r.rust_sigma.get(&c.code) {
+                    notes.push(format!("{z:+.1}σs"));
+                }
+                if !notes.is_empty() {
+                    cell.push_str(&format!(" ({})", notes.join("; ")));
+                }
+                if let (Some(t), Some(v), Some(o)) = (r.tolerance, r.values.get(&c.code), ours) {
+                    if (v - o).abs() > t {
+                        cell.push_str(" *");
+                    }
+                }
+                s.push_str(&format!(" {cell} |"));
+            }
+            s.push_str(&format!(
+                " {} |\n",
+                r.tolerance.map(|t| format!("± {}", fmt(t))).unwrap_or("–".into())
+            ));
+        }
+        for c in &self.codes {
+            if !c.deviations.is_empty() {
+                s.push_str(&format!("\n{} deviations: {}\n", c.code, c.deviations.join("; ")));
+            }
+        }
+        if self.failures.is_empty() {
+            s.push_str("\nAll checks passed.\n");
+        } else {
+            s.push_str("\nFailed checks:\n");
+            for f in &self.failures {
+                s.push_str(&format!("- {f}\n"));
+            }
+        }
+        s
+    }
+
+    /// CSV: metric, code, value, golden, paper, paper_sd, reference, tolerance.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from("metric,code,value,golden,paper,paper_sd,reference,tolerance_vs_rust\n");
+        let o = |x: Option<f64>| x.map(|v| v.to_string()).unwrap_or_default();
+        for r in &self.rows {
+            for c in &self.codes {
+                let v = r.values.get(&c.code).copied();
+                let g = r.golden.get(&c.code).copied();
+                if v.is_none() && g.is_none() {
+                    continue;
+                }
+                s.push_str(&format!(
+                    "{},{},{},{},{},{},\"{}\",{}\n",
+                    r.metric,
+                    c.code,
+                    o(v),
+                    o(g),
+                    o(r.paper),
+                    o(r.paper_sd),
+                    r.reference.as_deref().unwrap_or(""),
+                    o(r.tolerance)
+                ));
+            }
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result(code: &str, phi: f64, p: f64) -> CodeResult {
+        CodeResult {
+            code: code.into(),
+            outcome: "ran".into(),
+            status: Some("equilibrium".into()),
+            version: None,
+            wall_seconds: Some(1.0),
+            message: None,
+            deviations: vec![],
+            metrics: [("phi".to_string(), phi), ("pressure".to_string(), p)].into(),
+            golden: BTreeMap::new(),
+            pressure_target: Some(1.0),
+            pressure_tolerance: Some(1e-4),
+        }
+    }
+
+    #[test]
+    fn bands_file_parses() {
+        let b = Bands::embedded();
+        assert!(b.k > 0.0);
+        assert!(b.tolerance("xcode-smoke", "phi").is_some());
+    }
+
+    #[test]
+    fn out_of_band_and_pressure_misses_are_failures() {
+        let mut bands = Bands {
+            k: 3.0,
+            scenes: BTreeMap::new(),
+        };
+        bands.scenes.insert(
+            "s".into(),
+            [("phi".to_string(), Band { spread: 0.001, seeds: 4 })].into(),
+        );
+        let ok = build("s", 10, None, vec![result("rust", 0.60, 1.0), result("lammps", 0.603, 1.00005)], &bands);
+        assert!(ok.failures.is_empty(), "{:?}", ok.failures);
+        // 3√2·0.001 = 0.00424: 0.605 is out.
+        let bad = build("s", 10, None, vec![result("rust", 0.60, 1.0), result("lammps", 0.605, 1.001)], &bands);
+        assert_eq!(bad.failures.len(), 2, "{:?}", bad.failures);
+        let mut missing = result("yade", 0.0, 0.0);
+        missing.outcome = "missing".into();
+        missing.metrics.clear();
+        let m = build("s", 10, None, vec![result("rust", 0.60, 1.0), missing], &bands);
+        assert!(m.failures.is_empty());
+        let mut timeout = result("yade", 0.0, 0.0);
+        timeout.outcome = "timeout".into();
+        let t = build("s", 10, None, vec![result("rust", 0.60, 1.0), timeout], &bands);
+        assert_eq!(t.failures.len(), 1);
+        assert!(t.to_markdown(false).contains("Failed checks"));
+    }
+}

@@ -1,0 +1,409 @@
+//! `grainbench compare SCENE --codes …`: runs a scene in our engine and in the external codes
+//! from the same start, reads every final state into our snapshot format, measures all of
+//! them with the same `comparisons/` code, and writes the table (Markdown, CSV, JSON) and the
+//! overlaid P(f) and g(r) plots. `grainbench golden update` records the results.
+
+use crate::{run, RunFlags, STOP};
+use anyhow::{bail, Context, Result};
+use grainbench_comparisons::crosscode::{self, Bands, CodeResult, Comparison};
+use grainbench_comparisons::decks::{self, Code, Start, StageKind};
+use grainbench_comparisons::import::{self, Meta};
+use grainbench_comparisons::metrics::Analysis;
+use grainbench_comparisons::plots;
+use grainbench_engine::snapshot::{write_atomic, Snapshot};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+pub struct Args {
+    pub scene: String,
+    pub codes: Vec<String>,
+    pub out: Option<PathBuf>,
+    pub time_limit: f64,
+    pub np: Option<usize>,
+    pub quiet: bool,
+    pub all_metrics: bool,
+}
+
+/// Finds `name` on PATH.
+pub fn which(name: &str) -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join(name))
+        .find(|p| p.is_file())
+}
+
+pub fn compare(a: &Args) -> Result<i32> {
+    let scene = crate::load_scene(&a.scene)?;
+    let codes = if a.codes.is_empty() {
+        Code::ALL.to_vec()
+    } else {
+        crate::xcode::parse_codes(&a.codes, true)?
+    };
+    if a.np == Some(0) {
+        bail!("--np must be at least 1");
+    }
+    if !(a.time_limit > 0.0) {
+        bail!("--time-limit must be a positive number of seconds");
+    }
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("runs/compare").join(&scene.name));
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let start = Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
+    let (p_target, p_tol) = match start.stages.last() {
+        Some(s) => match s.kind {
+            StageKind::Compress { pressure } => (Some(pressure), Some(s.tolerances.stress)),
+            _ => (None, None),
+        },
+        None => (None, None),
+    };
+    eprintln!(
+        "compare {} (N = {}): {} → {}",
+        scene.name,
+        start.n(),
+        codes.iter().map(|c| c.name()).collect::<Vec<_>>().join(", "),
+        out.display()
+    );
+    let mut results = Vec::new();
+    let mut snaps: Vec<(String, Snapshot)> = Vec::new();
+    for &code in &codes {
+        if STOP.load(Ordering::SeqCst) {
+            break;
+        }
+        let dir = out.join(code.name());
+        let mut r = CodeResult {
+            code: code.name().into(),
+            outcome: "ran".into(),
+            status: None,
+            version: None,
+            wall_seconds: None,
+            message: None,
+            deviations: Vec::new(),
+            metrics: BTreeMap::new(),
+            golden: crosscode::golden_metrics(Path::new("."), &scene.name, code.name()),
+            pressure_target: p_target,
+            pressure_tolerance: p_tol,
+        };
+        let snap = match code {
+            Code::Rust => run_rust(&scene, &dir, a.quiet, &mut r)?,
+            _ => run_external(&start, code, &dir, a, &mut r)?,
+        };
+        if let Some(snap) = snap {
+            let analysis = crate::analysis_of(&snap);
+            r.metrics = analysis.metric_values().into_iter().collect();
+            r.status = Some(snap.status.clone());
+            snaps.push((code.name().to_string(), snap));
+        }
+        eprintln!(
+            "{:<9} {}{}",
+            code.name(),
+            r.outcome,
+            r.status
+                .as_deref()
+                .map(|s| format!(" ({s}, {:.1} s)", r.wall_seconds.unwrap_or(f64::NAN)))
+                .or(r.message.as_deref().map(|m| format!(": {m}")))
+                .unwrap_or_default()
+        );
+        results.push(r);
+    }
+    let cmp = crosscode::build(
+        &scene.name,
+        start.n(),
+        Some(scene.paper_state.as_deref().unwrap_or(&scene.name)),
+        results,
+        &Bands::embedded(),
+    );
+    write_outputs(&out, &cmp, &snaps, a.all_metrics)?;
+    Ok(if cmp.failures.is_empty() { 0 } else { 1 })
+}
+
+fn write_outputs(out: &Path, cmp: &Comparison, snaps: &[(String, Snapshot)], all: bool) -> Result<()> {
+    let md = cmp.to_markdown(all);
+    println!("{md}");
+    write_atomic(&out.join("compare.md"), cmp.to_markdown(true).as_bytes())?;
+    write_atomic(&out.join("compare.csv"), cmp.to_csv().as_bytes())?;
+    write_atomic(
+        &out.join("compare.json"),
+        (serde_json::to_string_pretty(cmp)? + "\n").as_bytes(),
+    )?;
+    let analyses: Vec<(String, Analysis)> = snaps
+        .iter()
+        .map(|(c, s)| (c.clone(), crate::analysis_of(s)))
+        .collect();
+    let pf: Vec<(String, Vec<(f64, f64)>)> = analyses
+        .iter()
+        .map(|(c, a)| (c.clone(), crate::reproduce::points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y)))))
+        .filter(|(_, p)| !p.is_empty())
+        .collect();
+    let gr: Vec<(String, Vec<(f64, f64)>)> = analyses
+        .iter()
+        .map(|(c, a)| {
+            (
+                c.clone(),
+                crate::reproduce::points(a.structure.pair_correlation.as_ref().map(|g| (&g.x, &g.y))),
+            )
+        })
+        .filter(|(_, p)| !p.is_empty())
+        .collect();
+    let frictionless = analyses
+        .first()
+        .is_some_and(|(_, a)| a.dimension == 3 && a.mu == Some(0.0));
+    if !pf.is_empty() {
+        if let Err(e) = plots::force_distribution(&out.join("pf"), &series(&pf), frictionless) {
+            eprintln!("warning: no P(f) plot: {e}");
+        }
+    }
+    if !gr.is_empty() {
+        if let Err(e) = plots::pair_correlation(&out.join("gr"), &series(&gr), Some(8.0)) {
+            eprintln!("warning: no g(r) plot: {e}");
+        }
+    }
+    eprintln!(
+        "wrote {0}/compare.md, compare.csv, compare.json, pf.svg/png, gr.svg/png{1}",
+        out.display(),
+        if cmp.failures.is_empty() {
+            String::new()
+        } else {
+            format!("; {} check(s) failed", cmp.failures.len())
+        }
+    );
+    Ok(())
+}
+
+fn series(v: &[(String, Vec<(f64, f64)>)]) -> Vec<plots::Series<'_>> {
+    v.iter().map(|(l, p)| plots::Series::new(l, p)).collect()
+}
+
+/// Our engine, in this process.
+fn run_rust(scene: &grainbench_engine::Scene, dir: &Path, quiet: bool, r: &mut CodeResult) -> Result<Option<Snapshot>> {
+    let flags = RunFlags {
+        quiet,
+        report: false,
+        resume: false,
+        checkpoint_every: 60.0,
+    };
+    r.version = Some(format!("grainbench {}", env!("CARGO_PKG_VERSION")));
+    let t = Instant::now();
+    let (code, outcome) = run(scene, dir, &flags)?;
+    r.wall_seconds = Some(t.elapsed().as_secs_f64());
+    match outcome {
+        Some(o) if code == 0 => Ok(Some(o.snapshot)),
+        Some(o) => {
+            r.outcome = "interrupted".into();
+            Ok(Some(o.snapshot))
+        }
+        None => {
+            r.outcome = "failed".into();
+            r.message = Some(format!("grainbench run exited with status {code}"));
+            Ok(None)
+        }
+    }
+}
+
+/// An external code in its own work directory, with a progress line and a time limit.
+fn run_external(start: &Start, code: Code, dir: &Path, a: &Args, r: &mut CodeResult) -> Result<Option<Snapshot>> {
+    let Some(binary) = which(code.binary()) else {
+        r.outcome = "missing".into();
+        r.message = Some(format!(
+            "`{}` not found on PATH; install with `{}` (or `bash ci/install-externals.sh`)",
+            code.binary(),
+            code.install_hint()
+        ));
+        return Ok(None);
+    };
+    let deck = match decks::deck(start, code) {
+        Ok(d) => d,
+        Err(refusal) => {
+            r.outcome = "refused".into();
+            r.message = Some(refusal.to_string());
+            return Ok(None);
+        }
+    };
+    r.deviations = deck.deviations.clone();
+    // A fresh work directory: old dumps must not be read as this run's.
+    if dir.exists() {
+        std::fs::remove_dir_all(dir).with_context(|| format!("clearing {}", dir.display()))?;
+    }
+    crate::xcode::write_decks(start, &[code], dir.parent().unwrap_or(Path::new(".")), true)?;
+    let mut cmd = match (a.np, code) {
+        (Some(k), Code::Lammps | Code::Liggghts) => {
+            let Some(mpirun) = which("mpirun") else {
+                bail!("--np needs `mpirun` (Debian: apt-get install -y --no-install-recommends openmpi-bin)");
+            };
+            let mut c = Command::new(mpirun);
+            c.args(["--allow-run-as-root", "--oversubscribe", "-np", &k.to_string()]);
+            c.arg(&binary);
+            c
+        }
+        _ => Command::new(&binary),
+    };
+    cmd.args(&deck.args).current_dir(dir).stdin(Stdio::null());
+    let stdout = std::fs::File::create(dir.join("stdout.log"))?;
+    let stderr = std::fs::File::create(dir.join("stderr.log"))?;
+    cmd.stdout(stdout).stderr(stderr);
+    if code == Code::Yade {
+        // YADE opens local ports and reads its own environment; keep it headless.
+        cmd.env("DISPLAY", "");
+    }
+    let t = Instant::now();
+    let mut child = cmd
+        .spawn()
+        .with_context(|| format!("starting {}", binary.display()))?;
+    let bar = if a.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new_spinner();
+        b.set_style(ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix} {msg}").expect("template"));
+        b.set_prefix(code.name());
+        b
+    };
+    let plain = !a.quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mut last_plain = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait()? {
+            break Some(s);
+        }
+        let elapsed = t.elapsed().as_secs_f64();
+        if elapsed > a.time_limit || STOP.load(Ordering::SeqCst) {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        let line = last_line(&dir.join("stdout.log"));
+        bar.set_message(line.clone());
+        bar.tick();
+        if plain && last_plain.elapsed().as_secs_f64() >= 10.0 {
+            last_plain = Instant::now();
+            eprintln!("  {} [{elapsed:.0} s] {line}", code.name());
+        }
+        std::thread::sleep(Duration::from_millis(250));
+    };
+    bar.finish_and_clear();
+    r.wall_seconds = Some(t.elapsed().as_secs_f64());
+    r.version = version_line(code, &dir.join("stdout.log"));
+    let logs = format!("logs in {}", dir.display());
+    match status {
+        None if STOP.load(Ordering::SeqCst) => {
+            r.outcome = "interrupted".into();
+            r.message = Some(logs);
+            return Ok(None);
+        }
+        None => {
+            r.outcome = "timeout".into();
+            r.message = Some(format!("killed after the time limit of {} s (--time-limit); {logs}", a.time_limit));
+            return Ok(None);
+        }
+        Some(s) if !s.success() => {
+            r.outcome = "failed".into();
+            r.message = Some(format!(
+                "exited with {s}; last output: {:?}; {logs}",
+                last_line(&dir.join("stderr.log")).chars().chain(last_line(&dir.join("stdout.log")).chars()).collect::<String>()
+            ));
+            return Ok(None);
+        }
+        Some(_) => {}
+    }
+    let meta = Meta::read(dir)?;
+    match import::read(code, dir, &meta) {
+        Ok(snap) => {
+            snap.write(&dir.join("final.snap.json"))?;
+            Ok(Some(snap))
+        }
+        Err(e) => {
+            r.outcome = "failed".into();
+            r.message = Some(format!("reading its final state: {e}; {logs}"));
+            Ok(None)
+        }
+    }
+}
+
+/// The last non-empty line of a log (for the progress line and error messages).
+fn last_line(path: &Path) -> String {
+    let Ok(bytes) = std::fs::read(path) else {
+        return String::new();
+    };
+    let tail = &bytes[bytes.len().saturating_sub(4096)..];
+    String::from_utf8_lossy(tail)
+        .lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("")
+        .chars()
+        .take(120)
+        .collect()
+}
+
+/// The code's own version line from its output.
+fn version_line(code: Code, stdout: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(stdout).ok()?;
+    let key = match code {
+        Code::Lammps => "LAMMPS (",
+        Code::Liggghts => "LIGGGHTS (",
+        Code::Yade => "Yade ",
+        Code::Rust => return None,
+    };
+    text.lines()
+        .find(|l| l.contains(key))
+        .map(|l| l.trim().to_string())
+        .or_else(|| Some(code.binary().to_string()))
+}
+
+/// `grainbench golden update SCENE`: records the results of the last `compare` run of the
+/// scene (from `runs/compare/<scene>/` or `--from`) as `golden/<scene>/<code>.json`.
+pub fn golden_update(scene: &str, codes: &[String], from: Option<PathBuf>, command: Option<String>) -> Result<i32> {
+    let scene = crate::load_scene(scene)?;
+    let dir = from.unwrap_or_else(|| Path::new("runs/compare").join(&scene.name));
+    let path = dir.join("compare.json");
+    let text = std::fs::read_to_string(&path).with_context(|| {
+        format!(
+            "reading {}: run `grainbench compare {}` first (golden update records its results)",
+            path.display(),
+            scene.name
+        )
+    })?;
+    let cmp: Comparison = serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    if cmp.scene != scene.name {
+        bail!("{} holds scene {}, not {}", path.display(), cmp.scene, scene.name);
+    }
+    let wanted = if codes.is_empty() {
+        Vec::new()
+    } else {
+        crate::xcode::parse_codes(codes, true)?
+    };
+    let mut written = 0;
+    for c in &cmp.codes {
+        if !wanted.is_empty() && !wanted.iter().any(|w| w.name() == c.code) {
+            continue;
+        }
+        if c.outcome != "ran" {
+            eprintln!("{}: not recorded ({})", c.code, c.outcome);
+            continue;
+        }
+        let doc = serde_json::json!({
+            "code": c.version,
+            "scene": scene.name,
+            "n": cmp.n,
+            "command": command.clone().unwrap_or_else(|| format!("grainbench compare {} --codes {}", scene.name, c.code)),
+            "deviations": c.deviations,
+            "seeds": [{
+                "seed": scene.seed,
+                "status": c.status,
+                "wall_seconds": c.wall_seconds,
+                "metrics": c.metrics,
+            }],
+        });
+        let out = Path::new("golden").join(&scene.name).join(format!("{}.json", c.code));
+        write_atomic(&out, (serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
+        println!("wrote {}", out.display());
+        written += 1;
+    }
+    if written == 0 {
+        bail!("nothing recorded: no code in {} ran to its end", path.display());
+    }
+    Ok(0)
+}
