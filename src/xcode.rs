@@ -5,6 +5,9 @@ use grainbench_comparisons::decks::{self, capability, Code, Deck, Start};
 use grainbench_engine::snapshot::write_atomic;
 use std::path::{Path, PathBuf};
 
+/// Written instead of a deck when a code cannot express the scene.
+pub const REFUSED: &str = "refused.txt";
+
 /// Parses `--codes a,b,c`.
 pub fn parse_codes(list: &[String], allow_rust: bool) -> Result<Vec<Code>> {
     let mut out = Vec::new();
@@ -34,6 +37,7 @@ pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> R
         match decks::deck(start, code) {
             Ok(deck) => {
                 let dir = root.join(code.name());
+                let _ = std::fs::remove_file(dir.join(REFUSED));
                 for (name, text) in &deck.files {
                     let path = dir.join(name);
                     write_atomic(&path, text.as_bytes())
@@ -54,7 +58,15 @@ pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> R
                 }
                 written.push(deck);
             }
-            Err(refusal) => eprintln!("{code}: not written: {refusal}"),
+            Err(refusal) => {
+                // Recorded beside the decks, so a change of the matrix shows as a diff.
+                let path = root.join(code.name()).join(REFUSED);
+                write_atomic(&path, format!("{refusal}\n").as_bytes())
+                    .with_context(|| format!("writing {}", path.display()))?;
+                if !quiet {
+                    eprintln!("{code}: not written: {refusal}");
+                }
+            }
         }
     }
     Ok(written)

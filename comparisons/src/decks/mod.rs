@@ -352,9 +352,13 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
     };
     deck.code = code;
     deck.deviations = deviations;
+    let mut meta = start.meta(code);
+    for (name, text) in deck.files.iter().skip(1) {
+        meta.data.insert(name.clone(), format!("{:016x}", fnv1a(text.as_bytes())));
+    }
     deck.files.push((
         crate::import::Meta::FILE.into(),
-        serde_json::to_string_pretty(&start.meta(code)).expect("meta encodes") + "\n",
+        serde_json::to_string_pretty(&meta).expect("meta encodes") + "\n",
     ));
     Ok(deck)
 }
@@ -384,6 +388,7 @@ impl Start {
                 format!("P_ref a^{}", self.dimension - 1)
             },
             n: self.n(),
+            data: Default::default(),
         }
     }
 }
@@ -424,6 +429,18 @@ pub fn header_lines(start: &Start, code: Code, deviations: &[String]) -> Vec<Str
         }
     }
     h
+}
+
+/// FNV-1a, 64 bits: a stable checksum of the generated data files.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf29ce484222325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x100000001b3)
+    })
+}
+
+/// Is `name` a generated data file (not committed; its checksum is in `deck.json`)?
+pub fn is_data_file(deck: &Deck, name: &str) -> bool {
+    deck.files.iter().skip(1).any(|(n, _)| n == name) && name != crate::import::Meta::FILE
 }
 
 /// Formats a float so that it reads back to the same value (shortest round-trip form).

@@ -33,6 +33,10 @@ pub struct Meta {
     pub mu: Option<f64>,
     pub force_unit: String,
     pub n: usize,
+    /// FNV-1a 64 checksums of the deck's data files (name → hex), so the committed deck
+    /// records the data file it was written with (data files are generated, not committed).
+    #[serde(default)]
+    pub data: std::collections::BTreeMap<String, String>,
 }
 
 impl Meta {
