@@ -59,10 +59,20 @@ enum Command {
     },
     /// Packing metrics of a snapshot: Φ, z, z*, x0, force moments, AR07 (22) / GRC07 (18) checks.
     Analyze {
+        /// A grainbench snapshot, or with --from a directory of another code's final dumps.
         snapshot: PathBuf,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
+        /// Read the final state of another code from a directory: `lammps` (dump custom +
+        /// dump local), `liggghts` (dump custom + pair/gran/local), `yade` (text export); the
+        /// directory needs a `deck.json` (written with the decks; format in
+        /// docs/external-formats/).
+        #[arg(long, value_name = "CODE")]
+        from: Option<String>,
+        /// Also write the state read as a grainbench snapshot.
+        #[arg(long, value_name = "FILE")]
+        write: Option<PathBuf>,
     },
     /// List the embedded scenes.
     Scenes,
@@ -246,7 +256,12 @@ fn dispatch(cli: Cli) -> Result<i32> {
             }
             Ok(code)
         }
-        Command::Analyze { snapshot, json } => analyze(&snapshot, json),
+        Command::Analyze {
+            snapshot,
+            json,
+            from,
+            write,
+        } => analyze(&snapshot, json, from.as_deref(), write.as_deref()),
         Command::Reproduce {
             paper,
             state,
@@ -606,8 +621,30 @@ fn analysis_of(snap: &Snapshot) -> grainbench_comparisons::metrics::Analysis {
     grainbench_comparisons::metrics::analyze(snap, &Default::default())
 }
 
-fn analyze(path: &Path, json: bool) -> Result<i32> {
-    let snap = Snapshot::read(path)?;
+fn analyze(path: &Path, json: bool, from: Option<&str>, write: Option<&Path>) -> Result<i32> {
+    use grainbench_comparisons::{decks::Code, import};
+    let snap = match from {
+        None => Snapshot::read(path)?,
+        Some(name) => {
+            let code = match Code::parse(name) {
+                Some(Code::Rust) | None => {
+                    bail!("--from: expected lammps, liggghts or yade, got `{name}`")
+                }
+                Some(c) => c,
+            };
+            if !path.is_dir() {
+                bail!(
+                    "--from {name}: {} is not a directory (give the directory holding the final dumps and deck.json)",
+                    path.display()
+                );
+            }
+            let meta = import::Meta::read(path)?;
+            import::read(code, path, &meta)?
+        }
+    };
+    if let Some(w) = write {
+        snap.write(w)?;
+    }
     let a = analysis_of(&snap);
     if json {
         println!("{}", serde_json::to_string_pretty(&a)?);

@@ -10,6 +10,8 @@ macro_rules! scenes {
 pub const SCENES: &[(&str, &str)] = scenes!(
     "default",
     "xcode-smoke",
+    "ar07-A-n1372",
+    "ar07-D-10kPa-n1372",
     "ar07-A",
     "ar07-A-ci",
     "ar07-Aprime",
