@@ -6,7 +6,7 @@
 use crate::{run, RunFlags, STOP};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::{self, Bands, CodeResult, Comparison};
-use grainbench_comparisons::decks::{self, Code, Start, StageKind};
+use grainbench_comparisons::decks::{self, Code, StageKind, Start};
 use grainbench_comparisons::import::{self, Meta};
 use grainbench_comparisons::metrics::Analysis;
 use grainbench_comparisons::plots;
@@ -66,7 +66,11 @@ pub fn compare(a: &Args) -> Result<i32> {
         "compare {} (N = {}): {} → {}",
         scene.name,
         start.n(),
-        codes.iter().map(|c| c.name()).collect::<Vec<_>>().join(", "),
+        codes
+            .iter()
+            .map(|c| c.name())
+            .collect::<Vec<_>>()
+            .join(", "),
         out.display()
     );
     let mut results = Vec::new();
@@ -122,7 +126,12 @@ pub fn compare(a: &Args) -> Result<i32> {
     Ok(if cmp.failures.is_empty() { 0 } else { 1 })
 }
 
-fn write_outputs(out: &Path, cmp: &Comparison, snaps: &[(String, Snapshot)], all: bool) -> Result<()> {
+fn write_outputs(
+    out: &Path,
+    cmp: &Comparison,
+    snaps: &[(String, Snapshot)],
+    all: bool,
+) -> Result<()> {
     let md = cmp.to_markdown(all);
     println!("{md}");
     write_atomic(&out.join("compare.md"), cmp.to_markdown(true).as_bytes())?;
@@ -137,7 +146,12 @@ fn write_outputs(out: &Path, cmp: &Comparison, snaps: &[(String, Snapshot)], all
         .collect();
     let pf: Vec<(String, Vec<(f64, f64)>)> = analyses
         .iter()
-        .map(|(c, a)| (c.clone(), crate::reproduce::points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y)))))
+        .map(|(c, a)| {
+            (
+                c.clone(),
+                crate::reproduce::points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y))),
+            )
+        })
         .filter(|(_, p)| !p.is_empty())
         .collect();
     let gr: Vec<(String, Vec<(f64, f64)>)> = analyses
@@ -145,7 +159,9 @@ fn write_outputs(out: &Path, cmp: &Comparison, snaps: &[(String, Snapshot)], all
         .map(|(c, a)| {
             (
                 c.clone(),
-                crate::reproduce::points(a.structure.pair_correlation.as_ref().map(|g| (&g.x, &g.y))),
+                crate::reproduce::points(
+                    a.structure.pair_correlation.as_ref().map(|g| (&g.x, &g.y)),
+                ),
             )
         })
         .filter(|(_, p)| !p.is_empty())
@@ -180,7 +196,12 @@ fn series(v: &[(String, Vec<(f64, f64)>)]) -> Vec<plots::Series<'_>> {
 }
 
 /// Our engine, in this process.
-fn run_rust(scene: &grainbench_engine::Scene, dir: &Path, quiet: bool, r: &mut CodeResult) -> Result<Option<Snapshot>> {
+fn run_rust(
+    scene: &grainbench_engine::Scene,
+    dir: &Path,
+    quiet: bool,
+    r: &mut CodeResult,
+) -> Result<Option<Snapshot>> {
     let flags = RunFlags {
         quiet,
         report: false,
@@ -206,7 +227,13 @@ fn run_rust(scene: &grainbench_engine::Scene, dir: &Path, quiet: bool, r: &mut C
 }
 
 /// An external code in its own work directory, with a progress line and a time limit.
-fn run_external(start: &Start, code: Code, dir: &Path, a: &Args, r: &mut CodeResult) -> Result<Option<Snapshot>> {
+fn run_external(
+    start: &Start,
+    code: Code,
+    dir: &Path,
+    a: &Args,
+    r: &mut CodeResult,
+) -> Result<Option<Snapshot>> {
     let Some(binary) = which(code.binary()) else {
         r.outcome = "missing".into();
         r.message = Some(format!(
@@ -236,7 +263,12 @@ fn run_external(start: &Start, code: Code, dir: &Path, a: &Args, r: &mut CodeRes
                 bail!("--np needs `mpirun` (Debian: apt-get install -y --no-install-recommends openmpi-bin)");
             };
             let mut c = Command::new(mpirun);
-            c.args(["--allow-run-as-root", "--oversubscribe", "-np", &k.to_string()]);
+            c.args([
+                "--allow-run-as-root",
+                "--oversubscribe",
+                "-np",
+                &k.to_string(),
+            ]);
             c.arg(&binary);
             c
         }
@@ -258,7 +290,10 @@ fn run_external(start: &Start, code: Code, dir: &Path, a: &Args, r: &mut CodeRes
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::new_spinner();
-        b.set_style(ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix} {msg}").expect("template"));
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix} {msg}")
+                .expect("template"),
+        );
         b.set_prefix(code.name());
         b
     };
@@ -295,14 +330,20 @@ fn run_external(start: &Start, code: Code, dir: &Path, a: &Args, r: &mut CodeRes
         }
         None => {
             r.outcome = "timeout".into();
-            r.message = Some(format!("killed after the time limit of {} s (--time-limit); {logs}", a.time_limit));
+            r.message = Some(format!(
+                "killed after the time limit of {} s (--time-limit); {logs}",
+                a.time_limit
+            ));
             return Ok(None);
         }
         Some(s) if !s.success() => {
             r.outcome = "failed".into();
             r.message = Some(format!(
                 "exited with {s}; last output: {:?}; {logs}",
-                last_line(&dir.join("stderr.log")).chars().chain(last_line(&dir.join("stdout.log")).chars()).collect::<String>()
+                last_line(&dir.join("stderr.log"))
+                    .chars()
+                    .chain(last_line(&dir.join("stdout.log")).chars())
+                    .collect::<String>()
             ));
             return Ok(None);
         }
@@ -355,7 +396,12 @@ fn version_line(code: Code, stdout: &Path) -> Option<String> {
 
 /// `grainbench golden update SCENE`: records the results of the last `compare` run of the
 /// scene (from `runs/compare/<scene>/` or `--from`) as `golden/<scene>/<code>.json`.
-pub fn golden_update(scene: &str, codes: &[String], from: Option<PathBuf>, command: Option<String>) -> Result<i32> {
+pub fn golden_update(
+    scene: &str,
+    codes: &[String],
+    from: Option<PathBuf>,
+    command: Option<String>,
+) -> Result<i32> {
     let scene = crate::load_scene(scene)?;
     let dir = from.unwrap_or_else(|| Path::new("runs/compare").join(&scene.name));
     let path = dir.join("compare.json");
@@ -366,9 +412,15 @@ pub fn golden_update(scene: &str, codes: &[String], from: Option<PathBuf>, comma
             scene.name
         )
     })?;
-    let cmp: Comparison = serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let cmp: Comparison =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     if cmp.scene != scene.name {
-        bail!("{} holds scene {}, not {}", path.display(), cmp.scene, scene.name);
+        bail!(
+            "{} holds scene {}, not {}",
+            path.display(),
+            cmp.scene,
+            scene.name
+        );
     }
     let wanted = if codes.is_empty() {
         Vec::new()
@@ -397,13 +449,21 @@ pub fn golden_update(scene: &str, codes: &[String], from: Option<PathBuf>, comma
                 "metrics": c.metrics,
             }],
         });
-        let out = Path::new("golden").join(&scene.name).join(format!("{}.json", c.code));
-        write_atomic(&out, (serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
+        let out = Path::new("golden")
+            .join(&scene.name)
+            .join(format!("{}.json", c.code));
+        write_atomic(
+            &out,
+            (serde_json::to_string_pretty(&doc)? + "\n").as_bytes(),
+        )?;
         println!("wrote {}", out.display());
         written += 1;
     }
     if written == 0 {
-        bail!("nothing recorded: no code in {} ran to its end", path.display());
+        bail!(
+            "nothing recorded: no code in {} ran to its end",
+            path.display()
+        );
     }
     Ok(0)
 }

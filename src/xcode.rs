@@ -73,7 +73,12 @@ pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> R
 }
 
 /// `grainbench decks`.
-pub fn decks_command(scenes: &[String], all: bool, codes: &[String], out: Option<PathBuf>) -> Result<i32> {
+pub fn decks_command(
+    scenes: &[String],
+    all: bool,
+    codes: &[String],
+    out: Option<PathBuf>,
+) -> Result<i32> {
     let codes = if codes.is_empty() {
         Code::EXTERNAL.to_vec()
     } else {
@@ -109,7 +114,8 @@ pub fn capabilities_command(scene: Option<&str>) -> Result<i32> {
         None => print!("{}", capability::markdown()),
         Some(spec) => {
             let scene = crate::load_scene(spec)?;
-            let start = Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
+            let start =
+                Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
             println!("scene {} uses:", scene.name);
             println!("| feature | lammps | liggghts | yade |\n| --- | --- | --- | --- |");
             for f in decks::features(&start) {

@@ -61,7 +61,10 @@ fn committed_decks_match_the_generators() {
                     let f = e.file_name().to_string_lossy().to_string();
                     let data = f.starts_with("data.") || f == "grains.txt";
                     if !data && !expected.iter().any(|(n, _)| n == &f) {
-                        problems.push(format!("{} is not written by the generator", e.path().display()));
+                        problems.push(format!(
+                            "{} is not written by the generator",
+                            e.path().display()
+                        ));
                     }
                 }
             }

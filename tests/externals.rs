@@ -18,7 +18,12 @@ fn smoke_scene_agrees_across_codes() {
     let ci = std::env::var_os("CI").is_some();
     let assert = Command::cargo_bin("grainbench")
         .unwrap()
-        .args(["compare", "xcode-smoke", "--codes", "rust,lammps,liggghts,yade"])
+        .args([
+            "compare",
+            "xcode-smoke",
+            "--codes",
+            "rust,lammps,liggghts,yade",
+        ])
         .args(["-j", "1", "-q", "--time-limit", "900", "-o"])
         .arg(&out)
         .assert();
@@ -39,7 +44,11 @@ fn smoke_scene_agrees_across_codes() {
         assert_eq!(c.outcome, "ran", "{}: {:?}", c.code, c.message);
         assert_eq!(c.status.as_deref(), Some("equilibrium"), "{}", c.code);
         let p = c.metrics["pressure"];
-        assert!((p - 1.0).abs() <= 1e-4, "{}: contact-stress pressure {p}", c.code);
+        assert!(
+            (p - 1.0).abs() <= 1e-4,
+            "{}: contact-stress pressure {p}",
+            c.code
+        );
         for key in ["phi", "z_star", "x0"] {
             let tol = bands.tolerance("xcode-smoke", key).unwrap();
             let (v, o) = (c.metrics[key], rust.metrics[key]);

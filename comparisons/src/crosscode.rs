@@ -148,7 +148,11 @@ pub fn build(
     for key in keys {
         let p = published.and_then(|s| s.values.get(&key));
         let tolerance = bands.tolerance(scene, &key);
-        let spread = bands.scenes.get(scene).and_then(|m| m.get(&key)).map(|b| b.spread);
+        let spread = bands
+            .scenes
+            .get(scene)
+            .and_then(|m| m.get(&key))
+            .map(|b| b.spread);
         let mut row = Row {
             metric: key.clone(),
             paper: p.map(|v| v.value),
@@ -203,9 +207,11 @@ pub fn build(
                         c.status.as_deref().unwrap_or("?")
                     ));
                 }
-                if let (Some(t), Some(tol), Some(p)) =
-                    (c.pressure_target, c.pressure_tolerance, c.metrics.get("pressure"))
-                {
+                if let (Some(t), Some(tol), Some(p)) = (
+                    c.pressure_target,
+                    c.pressure_tolerance,
+                    c.metrics.get("pressure"),
+                ) {
                     if (p - t).abs() > tol {
                         failures.push(format!(
                             "{}: contact-stress pressure {p:.6} misses the target {t} by {:.2e} > criterion {tol:.2e}",
@@ -250,14 +256,18 @@ impl Comparison {
     /// Markdown: one column per code; each cell `value [golden] (Δ/σ_paper; Δ/σ_seeds vs rust)`.
     pub fn to_markdown(&self, all_metrics: bool) -> String {
         let mut s = format!("## {} (N = {})\n\n", self.scene, self.n);
-        s.push_str("| code | outcome | status | wall s | version |\n| --- | --- | --- | --- | --- |\n");
+        s.push_str(
+            "| code | outcome | status | wall s | version |\n| --- | --- | --- | --- | --- |\n",
+        );
         for c in &self.codes {
             s.push_str(&format!(
                 "| {} | {} | {} | {} | {} |\n",
                 c.code,
                 c.outcome,
                 c.status.as_deref().unwrap_or("–"),
-                c.wall_seconds.map(|w| format!("{w:.1}")).unwrap_or("–".into()),
+                c.wall_seconds
+                    .map(|w| format!("{w:.1}"))
+                    .unwrap_or("–".into()),
                 c.version.as_deref().or(c.message.as_deref()).unwrap_or("–")
             ));
         }
@@ -276,7 +286,12 @@ impl Comparison {
                 continue;
             }
             let paper = match (r.paper, r.paper_sd) {
-                (Some(v), Some(sd)) => format!("{} ± {} ({})", fmt(v), fmt(sd), r.reference.as_deref().unwrap_or("")),
+                (Some(v), Some(sd)) => format!(
+                    "{} ± {} ({})",
+                    fmt(v),
+                    fmt(sd),
+                    r.reference.as_deref().unwrap_or("")
+                ),
                 (Some(v), None) => format!("{} ({})", fmt(v), r.reference.as_deref().unwrap_or("")),
                 _ => "–".into(),
             };
@@ -309,12 +324,18 @@ impl Comparison {
             }
             s.push_str(&format!(
                 " {} |\n",
-                r.tolerance.map(|t| format!("± {}", fmt(t))).unwrap_or("–".into())
+                r.tolerance
+                    .map(|t| format!("± {}", fmt(t)))
+                    .unwrap_or("–".into())
             ));
         }
         for c in &self.codes {
             if !c.deviations.is_empty() {
-                s.push_str(&format!("\n{} deviations: {}\n", c.code, c.deviations.join("; ")));
+                s.push_str(&format!(
+                    "\n{} deviations: {}\n",
+                    c.code,
+                    c.deviations.join("; ")
+                ));
             }
         }
         if self.failures.is_empty() {
@@ -330,7 +351,8 @@ impl Comparison {
 
     /// CSV: metric, code, value, golden, paper, paper_sd, reference, tolerance.
     pub fn to_csv(&self) -> String {
-        let mut s = String::from("metric,code,value,golden,paper,paper_sd,reference,tolerance_vs_rust\n");
+        let mut s =
+            String::from("metric,code,value,golden,paper,paper_sd,reference,tolerance_vs_rust\n");
         let o = |x: Option<f64>| x.map(|v| v.to_string()).unwrap_or_default();
         for r in &self.rows {
             for c in &self.codes {
@@ -391,21 +413,52 @@ mod tests {
         };
         bands.scenes.insert(
             "s".into(),
-            [("phi".to_string(), Band { spread: 0.001, seeds: 4 })].into(),
+            [(
+                "phi".to_string(),
+                Band {
+                    spread: 0.001,
+                    seeds: 4,
+                },
+            )]
+            .into(),
         );
-        let ok = build("s", 10, None, vec![result("rust", 0.60, 1.0), result("lammps", 0.603, 1.00005)], &bands);
+        let ok = build(
+            "s",
+            10,
+            None,
+            vec![result("rust", 0.60, 1.0), result("lammps", 0.603, 1.00005)],
+            &bands,
+        );
         assert!(ok.failures.is_empty(), "{:?}", ok.failures);
         // 3√2·0.001 = 0.00424: 0.605 is out.
-        let bad = build("s", 10, None, vec![result("rust", 0.60, 1.0), result("lammps", 0.605, 1.001)], &bands);
+        let bad = build(
+            "s",
+            10,
+            None,
+            vec![result("rust", 0.60, 1.0), result("lammps", 0.605, 1.001)],
+            &bands,
+        );
         assert_eq!(bad.failures.len(), 2, "{:?}", bad.failures);
         let mut missing = result("yade", 0.0, 0.0);
         missing.outcome = "missing".into();
         missing.metrics.clear();
-        let m = build("s", 10, None, vec![result("rust", 0.60, 1.0), missing], &bands);
+        let m = build(
+            "s",
+            10,
+            None,
+            vec![result("rust", 0.60, 1.0), missing],
+            &bands,
+        );
         assert!(m.failures.is_empty());
         let mut timeout = result("yade", 0.0, 0.0);
         timeout.outcome = "timeout".into();
-        let t = build("s", 10, None, vec![result("rust", 0.60, 1.0), timeout], &bands);
+        let t = build(
+            "s",
+            10,
+            None,
+            vec![result("rust", 0.60, 1.0), timeout],
+            &bands,
+        );
         assert_eq!(t.failures.len(), 1);
         assert!(t.to_markdown(false).contains("Failed checks"));
     }

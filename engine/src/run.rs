@@ -1217,10 +1217,11 @@ pub fn time_step_for<D: Dim>(scene: &Scene, grains: &Grains<D>, kappa: f64) -> R
             time_step::<D, _>(scene, &system_of(scene, law, grains)?).0
         }
         Law::Linear { .. } => {
-            let law = <Linear<NoCohesion, Frictionless, NoRolling> as ContactLaw<D>>::with_kappa_scaled(
-                &linear_law(&scene.law, NoCohesion, Frictionless, NoRolling),
-                factor,
-            );
+            let law =
+                <Linear<NoCohesion, Frictionless, NoRolling> as ContactLaw<D>>::with_kappa_scaled(
+                    &linear_law(&scene.law, NoCohesion, Frictionless, NoRolling),
+                    factor,
+                );
             time_step::<D, _>(scene, &system_of(scene, law, grains)?).0
         }
     };
