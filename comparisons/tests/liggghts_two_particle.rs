@@ -17,12 +17,10 @@ const KAPPA: f64 = 1e4;
 const POISSON: f64 = 0.3;
 
 fn liggghts_present() -> bool {
-    let ok = Command::new("liggghts")
-        .arg("-h")
-        .stdin(std::process::Stdio::null())
-        .output()
-        .map(|o| o.status.success() || !o.stdout.is_empty())
-        .unwrap_or(false);
+    // Looked up on PATH (running `liggghts -h` would leave a log file in the cwd).
+    let ok = std::env::var_os("PATH").is_some_and(|p| {
+        std::env::split_paths(&p).any(|d| d.join(Code::Liggghts.binary()).is_file())
+    });
     if !ok {
         if std::env::var_os("CI").is_some() {
             panic!(
@@ -236,4 +234,36 @@ fn tangential_stiffness_and_damping() {
         assert!(err <= 1e-3, "tangential force rel. error {err}");
         assert!(rel(c.normal, ex.normal) <= 1e-3);
     }
+}
+
+/// Import and analysis of a finished LIGGGHTS run (the `xcode-smoke` deck, say):
+/// `LIGGGHTS_RUN_DIR=/tmp/lig-smoke/liggghts cargo test --release --test liggghts_two_particle
+/// -- --ignored --nocapture`. Writes `imported.json` (our snapshot format) beside the dumps.
+#[test]
+#[ignore = "needs a finished LIGGGHTS run in LIGGGHTS_RUN_DIR"]
+fn import_and_analyze_run() {
+    let dir = std::path::PathBuf::from(
+        std::env::var_os("LIGGGHTS_RUN_DIR").expect("set LIGGGHTS_RUN_DIR"),
+    );
+    let meta = Meta::read(&dir).unwrap();
+    let snap = import::read(Code::Liggghts, &dir, &meta).unwrap();
+    snap.write(&dir.join("imported.json")).unwrap();
+    let a = grainbench_comparisons::analyze(&snap, &Default::default());
+    let s = &snap.cell.contact_stress;
+    eprintln!(
+        "status {} step {} time {:.3}: Φ = {:.6}, z = {:.4}, z* = {:?}, rattlers {} ({:.3}), \
+         contact stress diag {:.6} {:.6} {:.6}, P = {:.6}",
+        snap.status,
+        snap.step,
+        snap.time,
+        a.packing_fraction,
+        a.z,
+        a.z_backbone,
+        a.rattlers,
+        a.rattler_fraction,
+        s[0][0],
+        s[1][1],
+        s[2][2],
+        (s[0][0] + s[1][1] + s[2][2]) / 3.0
+    );
 }

@@ -249,10 +249,10 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Rolling => Unsupported("rolling_friction epsd3 not generated"),
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),
             F::Disks => Unsupported("2D decks not generated for LIGGGHTS"),
-            F::StressControl => Approximate("no barostat fix: isotropic servo of fix deform, strain rate ∝ virial pressure error (full cap beyond 50 %), no cell mass"),
+            F::StressControl => Approximate("no barostat fix: per-axis servo of fix deform, strain rate ∝ virial stress error (full cap beyond 50 % of the target), no cell mass"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::MultiStage => Approximate("each stage restarts the servo; contact history carries over"),
-            F::EquilibriumCriteria => Approximate("kinetic energy of all grains (free spins included); checked every check_every steps"),
+            F::EquilibriumCriteria => Approximate("criteria as ours (kinetic energy: translation of all grains, rotation of grains with a contact), checked between runs of check_every steps"),
             _ => Exact,
         },
         Code::Yade => match f {
