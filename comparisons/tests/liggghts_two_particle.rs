@@ -171,6 +171,10 @@ fn normal_elastic_force() {
     let s = start(0.0, 1e-3, [-0.05, 0.0, 0.0], 10, 1e-5);
     let snap = run(&s);
     assert_eq!(snap.contacts.len(), 1);
+    // Zero tolerances: the stage ends at its step limit, after 10 steps of 1e-5.
+    assert_eq!(snap.status, "time-limit");
+    assert_eq!(snap.step, 10);
+    assert!((snap.time - 1e-4).abs() < 1e-12, "{}", snap.time);
     let c = &snap.contacts[0];
     let ex = expected(&snap, 0.0, [0.0; 3]);
     let err = rel(c.normal, ex.normal);

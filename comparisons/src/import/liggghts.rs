@@ -174,3 +174,58 @@ fn read_contacts(
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn meta() -> Meta {
+        Meta {
+            scene: "t".into(),
+            code: "liggghts".into(),
+            dimension: 3,
+            pressure_target: Some(1.0),
+            cohesive: false,
+            mu: Some(0.5),
+            force_unit: "P_ref a^2".into(),
+            n: 2,
+        }
+    }
+
+    /// A hand-written pair of dumps: grain id 7 at x = 9.8, id 3 at x = 0.6 (images across the
+    /// boundary, i → j along −x), force on id1 = 7 pushing it −x, away from id 3 (repulsion), plus a y part.
+    #[test]
+    fn signs_and_periodic_images() {
+        let dir = tempfile::tempdir().unwrap();
+        let box_ = "ITEM: BOX BOUNDS pp pp pp\n0 10\n0 10\n0 10\n";
+        std::fs::write(
+            dir.path().join("final.atoms"),
+            format!(
+                "ITEM: TIMESTEP\n5\nITEM: NUMBER OF ATOMS\n2\n{box_}ITEM: ATOMS id radius mass x y z vx vy vz omegax omegay omegaz\n\
+                 7 0.5 1 9.8 5 5 0 0 0 0 0 1\n3 0.5 1 0.6 5 5 1 0 0 0 0 0\n"
+            ),
+        )
+        .unwrap();
+        std::fs::write(
+            dir.path().join("final.contacts"),
+            format!(
+                "ITEM: TIMESTEP\n5\nITEM: NUMBER OF ENTRIES\n1\n{box_}ITEM: ENTRIES c_pgl[1] c_pgl[2] c_pgl[3] c_pgl[4] c_pgl[5] c_pgl[6] c_pgl[7]\n\
+                 7 3 1 -2.5 0.25 0 0.2\n"
+            ),
+        )
+        .unwrap();
+        std::fs::write(dir.path().join("final.status"), "equilibrium\n").unwrap();
+        let raw = read_dir(dir.path(), &meta()).unwrap();
+        // ids sorted: 3 → 0, 7 → 1.
+        assert_eq!(raw.position[0], vec![0.6, 5.0, 5.0]);
+        assert_eq!(raw.velocity[0], vec![1.0, 0.0, 0.0]);
+        assert_eq!(raw.angular_velocity[1], vec![0.0, 0.0, 1.0]);
+        assert_eq!(raw.step, 5);
+        assert_eq!(raw.status, "equilibrium");
+        let c = &raw.contacts[0];
+        assert_eq!((c.i, c.j), (1, 0));
+        // n (7 → 3 through the boundary) = +x; force on j = (2.5, −0.25, 0).
+        assert!((c.normal - 2.5).abs() < 1e-12, "{}", c.normal);
+        assert!((c.tangential[0]).abs() < 1e-12 && (c.tangential[1] + 0.25).abs() < 1e-12);
+    }
+}
