@@ -1,14 +1,349 @@
-//! liggghts deck generator.
+//! LIGGGHTS 3.8.0 deck generator (`shared/external-codes.md`).
+//!
+//! * Law: `pair_style gran model hertz tangential history tangential_damping on` with
+//!   `youngsModulus` E = Ẽ(1−ν²) (LIGGGHTS's Y* = E/(2(1−ν²)) for identical materials, so its
+//!   normal force (4/3)Y*√(R*h)·h is our (2/3)Ẽ√(R*h)·h), `poissonsRatio` ν (its
+//!   K_T = 8G*√(R*h) is our (2−2ν)/(2−ν)·K_N), `coefficientRestitution` from ζ (see
+//!   [`restitution`]) and `coefficientFriction` μ (μ = ∞ as 1e300). `units si` with reduced
+//!   numbers: `soft_particles yes` lifts the E ≥ 5e6 check. Tangential damping (at the same
+//!   fraction of critical as the normal one, on K_T) is kept on, a deviation: with it off, the
+//!   smoke packing kept 1.8e-8 kinetic energy per grain in a grain rocking on one contact.
+//! * Stress control: LIGGGHTS has no barostat fix. A servo: `fix ave/time` of the virial
+//!   pressure compute feeds `fix deform … variable`, with per-axis strain rates
+//!   ε̇_α = cap·clamp((σ_αα − P_target)/(w·P_target), −1, 1) ([`SERVO_BAND`] = w), so the cell
+//!   moves at the cap far from the target and slows down proportionally within w of it. Each
+//!   axis has its own rate as in our engine (AR07 (7)): an isotropic rate leaves diagonal
+//!   stresses apart by several % and the per-axis stress criterion never holds.
+//! * Kinetic energy per grain: translation of all grains plus rotation of grains with a
+//!   contact (`compute contact/atom`), as our engine counts it (free spins of rattlers are
+//!   never damped).
+//! * Stages run in chunks of `check_every` steps; after each chunk an `if` tests the
+//!   equilibrium criteria and `jump`s out (this LIGGGHTS has no `fix halt`).
+//! * Output: `final.atoms` (dump custom: id radius mass x y z vx vy vz omegax omegay
+//!   omegaz), `final.contacts` (dump local of `compute pair/gran/local id force delta`:
+//!   id1 id2 periodic-flag fx fy fz delta, force on the first grain), `final.status`
+//!   (`equilibrium` or `time-limit`), `final.time` (elapsed time and step).
 
-use super::{Code, Deck, Start};
+use super::{header_lines, num, Code, Deck, StageKind, Start};
+use grainbench_engine::scene::{Law, Mu};
+use std::fmt::Write as _;
 
-/// The liggghts deck of `start`.
+/// Smallest restitution LIGGGHTS 3.8.0 accepts (it requires 0.05 < e ≤ 1).
+pub const MIN_RESTITUTION: f64 = 0.0501;
+
+/// Relative pressure error over which the servo's strain rate goes from 0 to the cap.
+pub const SERVO_BAND: f64 = 0.5;
+
+/// LIGGGHTS's Hertz damping: γ_n = 2√(5/6)·|β|·√(S_n m*) with S_n = 2Y*√(R*h) = our K_N and
+/// β = ln e/√(ln²e + π²), i.e. ζ = √(5/6)|β| of our α = 2ζ√(m* K_N). Returns (e, effective ζ):
+/// e is clamped to [[`MIN_RESTITUTION`], 1], so ζ is capped near 0.63.
+pub fn restitution(zeta: f64) -> (f64, f64) {
+    let pi = std::f64::consts::PI;
+    let beta = zeta / (5.0f64 / 6.0).sqrt();
+    let e = if beta >= 1.0 {
+        0.0
+    } else {
+        (-pi * beta / (1.0 - beta * beta).sqrt()).exp()
+    };
+    let e = e.clamp(MIN_RESTITUTION, 1.0);
+    let ln = e.ln();
+    let zeta_eff = (5.0f64 / 6.0).sqrt() * ln.abs() / (ln * ln + pi * pi).sqrt();
+    (e, zeta_eff)
+}
+
+/// Young's modulus and Poisson ratio for the Hertz law at stage κ: Ẽ = κ^1.5 (AR07 (21) with
+/// P_ref = 1), E = Ẽ(1−ν²).
+fn young(kappa: f64, poisson: f64) -> f64 {
+    kappa.powf(1.5) * (1.0 - poisson * poisson)
+}
+
+fn mu_text(mu: Mu) -> String {
+    match mu {
+        Mu::Finite(x) => num(x),
+        Mu::Infinite => "1e300".into(),
+    }
+}
+
+/// The LIGGGHTS deck of `start`.
 pub fn deck(start: &Start, deviations: &[String]) -> Deck {
-    let _ = (start, deviations);
+    let (poisson, zeta) = match start.law() {
+        Law::HertzMindlin { poisson, zeta, .. } => (*poisson, *zeta),
+        // The capability matrix refuses the linear law for LIGGGHTS.
+        Law::Linear { zeta, .. } => (0.0, *zeta),
+    };
+    let (e, zeta_eff) = restitution(zeta);
+    let mut devs: Vec<String> = deviations.to_vec();
+    if (zeta_eff - zeta).abs() > 1e-9 * zeta.max(1.0) {
+        devs.push(format!(
+            "normal damping ζ = {zeta} given as restitution e = {} (LIGGGHTS needs 0.05 < e ≤ 1): effective ζ = {:.6}",
+            num(e),
+            zeta_eff
+        ));
+    }
+    if zeta_eff > 0.0 {
+        devs.push(format!(
+            "tangential viscous damping γ_t = 2ζ√(m* K_T) with ζ = {zeta_eff:.6} (LIGGGHTS `tangential_damping on`): without it, grains held by one contact rock without damping and the kinetic-energy criterion is never met"
+        ));
+    }
+    let mut s = String::new();
+    for h in header_lines(start, Code::Liggghts, &devs) {
+        let _ = writeln!(s, "# {h}");
+    }
+    let _ = writeln!(
+        s,
+        "# Run: liggghts -in in.liggghts -log log.liggghts (in this directory).\n\
+         # Writes final.atoms, final.contacts (id1 id2 periodic fx fy fz delta; force on id1),\n\
+         # final.status (equilibrium | time-limit) and final.time (time step).\n"
+    );
+    let first = &start.stages[0];
+    let _ = writeln!(
+        s,
+        "atom_style granular\natom_modify map array\nboundary p p p\nnewton off\n\
+         communicate single vel yes\nunits si\nsoft_particles yes\n\
+         read_data data.liggghts\nneighbor 0.1 bin\nneigh_modify delay 0\n"
+    );
+    let _ = writeln!(
+        s,
+        "fix m1 all property/global youngsModulus peratomtype {}\n\
+         fix m2 all property/global poissonsRatio peratomtype {}\n\
+         fix m3 all property/global coefficientRestitution peratomtypepair 1 {}\n\
+         fix m4 all property/global coefficientFriction peratomtypepair 1 {}\n\
+         pair_style gran model hertz tangential history tangential_damping on\n\
+         pair_coeff * *\nfix integr all nve/sphere\n",
+        num(young(first.kappa, poisson)),
+        num(poisson),
+        num(e),
+        mu_text(first.mu)
+    );
+    // Measures (the pair/gran/local compute must exist before the first run).
+    let _ = writeln!(
+        s,
+        "compute pgl all pair/gran/local id force delta\n\
+         compute p all pressure thermo_temp virial\n\
+         fix pav all ave/time 1 1 1 c_p[1] c_p[2] c_p[3]\n\
+         variable P equal (f_pav[1]+f_pav[2]+f_pav[3])/3\n\
+         compute tq all property/atom tqx tqy tqz\n\
+         variable fm atom sqrt(fx^2+fy^2+fz^2)\n\
+         variable tm atom sqrt(c_tq[1]^2+c_tq[2]^2+c_tq[3]^2)\n\
+         compute fmax all reduce max v_fm\n\
+         compute tmax all reduce max v_tm\n\
+         compute ket all ke\n\
+         compute cn all contact/atom\n\
+         compute rw all property/atom radius omegax omegay omegaz\n\
+         variable er atom (c_cn>0)*0.2*mass*c_rw[1]^2*(c_rw[2]^2+c_rw[3]^2+c_rw[4]^2)\n\
+         compute ker all reduce sum v_er\n\
+         variable kpg equal (c_ket+c_ker)/atoms\n\
+         variable Lxnow equal lx\nvariable Lynow equal ly\nvariable Lznow equal lz\n\
+         variable stepnow equal step\n\
+         variable tsum equal 0\n\
+"
+    );
+    let mut prev_mu = first.mu;
+    let mut prev_kappa = first.kappa;
+    for (k, st) in start.stages.iter().enumerate() {
+        let k1 = k + 1;
+        let _ = writeln!(s, "# ---- stage {k1}: {:?}", st.kind);
+        if st.mu != prev_mu {
+            let _ = writeln!(
+                s,
+                "fix m4 all property/global coefficientFriction peratomtypepair 1 {}",
+                mu_text(st.mu)
+            );
+            prev_mu = st.mu;
+        }
+        if st.kappa != prev_kappa {
+            let _ = writeln!(
+                s,
+                "fix m1 all property/global youngsModulus peratomtype {}",
+                num(young(st.kappa, poisson))
+            );
+            prev_kappa = st.kappa;
+        }
+        let _ = writeln!(s, "timestep {}", num(st.dt));
+        let tol = &st.tolerances;
+        let mut ok = format!(
+            "(c_fmax<={})*(c_tmax<={})*(v_kpg<={})",
+            num(tol.force),
+            num(tol.moment),
+            num(tol.kinetic_per_grain)
+        );
+        let mut thermo =
+            "step atoms v_P f_pav[1] f_pav[2] f_pav[3] c_fmax c_tmax v_kpg lx".to_string();
+        match st.kind {
+            StageKind::Compress { pressure } => {
+                for a in 1..=3 {
+                    let _ = write!(
+                        ok,
+                        "*(abs(f_pav[{a}]-{})<={})",
+                        num(pressure),
+                        num(tol.stress)
+                    );
+                }
+                // Per axis: ε̇_α = cap·clamp((σ_αα − P)/(w P), −1, 1), clamp written with abs
+                // (no min/max in equal-style variables of this version).
+                let dt = num(st.dt);
+                for (a, ax) in ["x", "y", "z"].iter().enumerate() {
+                    let a1 = a + 1;
+                    let _ = writeln!(
+                        s,
+                        "variable e{ax}{k1} equal (f_pav[{a1}]-{p})/{w}\n\
+                         variable r{ax}{k1} equal {c}*0.5*(abs(v_e{ax}{k1}+1)-abs(v_e{ax}{k1}-1))\n\
+                         variable L0{ax}{k1} equal 0\n\
+                         variable dL{ax}{k1} equal l{ax}*(1+v_r{ax}{k1}*{dt})-v_L0{ax}{k1}\n\
+                         variable vL{ax}{k1} equal l{ax}*v_r{ax}{k1}",
+                        p = num(pressure),
+                        // Band w·P_target (w in absolute units for a zero target).
+                        w = num(SERVO_BAND * if pressure > 0.0 { pressure } else { 1.0 }),
+                        c = num(st.max_strain_rate),
+                    );
+                }
+                let _ = writeln!(
+                    s,
+                    "fix servo all deform 1 x variable v_dLx{k1} v_vLx{k1} y variable v_dLy{k1} v_vLy{k1} z variable v_dLz{k1} v_vLz{k1} remap x"
+                );
+                thermo.push_str(&format!(" v_rx{k1} v_ry{k1} v_rz{k1}"));
+            }
+            StageKind::FixedVolume { .. } | StageKind::Aggregate => {}
+        }
+        let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
+        let chunks = st.max_steps.div_ceil(st.check_every).max(1);
+        let _ = writeln!(
+            s,
+            "variable ok{k1} equal {ok}\n\
+             thermo_style custom {thermo} v_ok{k1}\n\
+             thermo_modify norm no lost ignore\n\
+             thermo {ce}\n\
+             variable st string time-limit\n\
+             variable s0_{k1} equal ${{stepnow}}\n\
+             variable n{k1} loop {chunks}\n\
+             label loop{k1}",
+            ce = st.check_every,
+        );
+        if matches!(st.kind, StageKind::Compress { .. }) {
+            // fix deform sets L = L(run start) + dL: the start lengths of this chunk.
+            let _ = writeln!(
+                s,
+                "variable L0x{k1} equal ${{Lxnow}}\nvariable L0y{k1} equal ${{Lynow}}\nvariable L0z{k1} equal ${{Lznow}}"
+            );
+        }
+        let _ = writeln!(s, "run {}", st.check_every);
+        if full_time {
+            let _ = writeln!(
+                s,
+                "if \"${{ok{k1}}} > 0.5\" then \"variable st string equilibrium\" else \"variable st string time-limit\""
+            );
+        } else {
+            let _ = writeln!(
+                s,
+                "if \"${{ok{k1}}} > 0.5\" then \"variable st string equilibrium\" \"jump SELF done{k1}\""
+            );
+        }
+        let _ = writeln!(
+            s,
+            "next n{k1}\njump SELF loop{k1}\nlabel done{k1}\n\
+             variable tsum equal ${{tsum}}+(${{stepnow}}-${{s0_{k1}}})*{dt}",
+            dt = num(st.dt)
+        );
+        if matches!(st.kind, StageKind::Compress { .. }) {
+            let _ = writeln!(s, "unfix servo");
+        }
+        let _ = writeln!(s, "print \"stage {k1} end: ${{st}}\"\n");
+    }
+    let cols = (1..=7)
+        .map(|c| format!("c_pgl[{c}]"))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let g17 = |n: usize| vec!["%.17g"; n].join(" ");
+    let _ = writeln!(
+        s,
+        "# ---- final state\n\
+         print \"${{st}}\" file final.status\n\
+         print \"${{tsum}} ${{stepnow}}\" file final.time\n\
+         dump da all custom 1 final.atoms id radius mass x y z vx vy vz omegax omegay omegaz\n\
+         dump_modify da format \"%d {}\"\n\
+         dump dc all local 1 final.contacts {cols}\n\
+         dump_modify dc format \"{}\"\n\
+         run 0\n\
+         undump da\nundump dc\n\
+         print \"grainbench: done (${{st}})\"",
+        g17(11),
+        g17(7)
+    );
     Deck {
-        code: Code::Yade,
-        files: Vec::new(),
-        deviations: Vec::new(),
-        args: Vec::new(),
+        code: Code::Liggghts,
+        files: vec![
+            ("in.liggghts".into(), s),
+            ("data.liggghts".into(), data_file(start)),
+        ],
+        deviations: devs,
+        args: vec![
+            "-in".into(),
+            "in.liggghts".into(),
+            "-log".into(),
+            "log.liggghts".into(),
+        ],
+    }
+}
+
+/// `read_data` file for `atom_style granular`: id type diameter density x y z, then the
+/// velocities (id vx vy vz ωx ωy ωz) when any is nonzero.
+fn data_file(start: &Start) -> String {
+    let mut s = format!(
+        "LIGGGHTS data file written by grainbench (scene {})\n\n{} atoms\n1 atom types\n\n",
+        start.scene.name,
+        start.n()
+    );
+    let l3: Vec<f64> = (0..3)
+        .map(|a| start.lengths.get(a).copied().unwrap_or(1.0))
+        .collect();
+    for (a, ax) in ["x", "y", "z"].iter().enumerate() {
+        let _ = writeln!(s, "0 {} {ax}lo {ax}hi", num(l3[a]));
+    }
+    let rho = num(start.density());
+    s.push_str("\nAtoms\n\n");
+    for (i, (p, d)) in start.position.iter().zip(&start.diameter).enumerate() {
+        let c = |a: usize| p.get(a).copied().unwrap_or(0.0);
+        let _ = writeln!(
+            s,
+            "{} 1 {} {rho} {} {} {}",
+            i + 1,
+            num(*d),
+            num(c(0)),
+            num(c(1)),
+            num(c(2))
+        );
+    }
+    if start.velocity.iter().flatten().any(|&v| v != 0.0) {
+        s.push_str("\nVelocities\n\n");
+        for (i, v) in start.velocity.iter().enumerate() {
+            let c = |a: usize| v.get(a).copied().unwrap_or(0.0);
+            let _ = writeln!(
+                s,
+                "{} {} {} {} 0 0 0",
+                i + 1,
+                num(c(0)),
+                num(c(1)),
+                num(c(2))
+            );
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn restitution_maps_zeta() {
+        // ζ = 0.3 is representable: the effective ζ round-trips.
+        let (e, z) = restitution(0.3);
+        assert!(e > MIN_RESTITUTION && e < 1.0);
+        assert!((z - 0.3).abs() < 1e-12, "{z}");
+        // ζ = 0.98 is capped near 0.63.
+        let (e, z) = restitution(0.98);
+        assert_eq!(e, MIN_RESTITUTION);
+        assert!((z - 0.63).abs() < 0.005, "{z}");
+        assert_eq!(restitution(0.0), (1.0, 0.0));
     }
 }
