@@ -93,6 +93,12 @@ fn start(h: f64, v1: [f64; 3], v2: [f64; 3], m: f64, steps: u64, dt: f64) -> Sta
 /// force on atom 2 as LAMMPS wrote it minus N·n (n from atom 1 to 2): the tangential force on
 /// atom 2 seen by LAMMPS itself.
 fn run(start: &Start) -> (f64, Vec<f64>, Vec<f64>) {
+    let (n, t, f, _) = run_h(start);
+    (n, t, f)
+}
+
+/// [`run`], and the final overlap.
+fn run_h(start: &Start) -> (f64, Vec<f64>, Vec<f64>, f64) {
     let dir = tempfile::tempdir().expect("tempdir");
     let deck = decks::deck(start, Code::Lammps).expect("deck");
     for (name, text) in &deck.files {
@@ -128,7 +134,7 @@ fn run(start: &Start) -> (f64, Vec<f64>, Vec<f64>) {
     if std::env::var_os("GB_KEEP").is_some() {
         eprintln!("kept {}", dir.keep().display());
     }
-    (n, t, f2t)
+    (n, t, f2t, 1.0 - len)
 }
 
 fn law() -> HertzMindlin<()> {
@@ -202,4 +208,53 @@ fn lammps_two_particle_hertz_mindlin() {
         (0..3).all(|a| (f2[a] - t[a]).abs() < 1e-9),
         "{f2:?} vs {t:?}"
     );
+
+    // Unloading (AR07 App. A): the same tangential motion while the grains separate at w, μ = ∞,
+    // very heavy grains (the viscous pull stays harmless). Rescaling T by K_T(h')/K_T(h) at each
+    // decrease, then adding K_T(h')·u·dt, gives T = K_T(h_end)·u·t; without the rescale T would be
+    // Σ K_T(h_k) u dt, about 15 % more here (h: 1e-3 → 5e-4).
+    let w = 5e-2;
+    let mut st = start(
+        h,
+        [-w / 2.0, -u / 2.0, 0.0],
+        [w / 2.0, u / 2.0, 0.0],
+        1e8,
+        k,
+        dt,
+    );
+    st.stages[0].mu = Mu::Infinite;
+    let (_, t, _, h_end) = run_h(&st);
+    let want = -law.kt_ratio * law.normal_stiffness(h_end, r_eff) * delta;
+    eprintln!(
+        "unloading: h_end {h_end:.6e}, lammps T {:?}, ours {want}, rel {:.2e}",
+        t,
+        rel(t[1], want)
+    );
+    assert!(h_end < 0.6 * h);
+    assert!(rel(t[1], want) < 2e-3, "T {t:?} vs {want}");
+}
+
+/// Converts a finished LAMMPS deck directory (env `GB_LAMMPS_DIR`, with its `deck.json`) into
+/// our snapshot `final.json` in the same directory, for `grainbench analyze`:
+/// `GB_LAMMPS_DIR=/tmp/lmp-smoke/lammps cargo test --release --test lammps_two_particle -- --ignored`.
+#[test]
+#[ignore]
+fn lammps_convert_dir() {
+    let Some(dir) = std::env::var_os("GB_LAMMPS_DIR") else {
+        eprintln!("set GB_LAMMPS_DIR");
+        return;
+    };
+    let dir = Path::new(&dir);
+    let meta = Meta::read(dir).expect("deck.json");
+    let snap = import::read(Code::Lammps, dir, &meta).expect("import");
+    eprintln!(
+        "{}: step {}, time {}, status {}, {} contacts",
+        dir.display(),
+        snap.step,
+        snap.time,
+        snap.status,
+        snap.contacts.len()
+    );
+    snap.write(&dir.join("final.json"))
+        .expect("write final.json");
 }
