@@ -94,12 +94,8 @@ pub struct Stage {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum StageKind {
     /// Isotropic stress control to `pressure` (force unit / a^(d-1)).
-    Compress {
-        pressure: f64,
-    },
-    FixedVolume {
-        full_time: bool,
-    },
+    Compress { pressure: f64 },
+    FixedVolume { full_time: bool },
     Aggregate,
 }
 
@@ -273,10 +269,7 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
                 pressure = Some(*p);
                 // AR07 (23): I = ε̇√(m/(aP)); GRC08: I_a = ε̇ T0 with T0 = 1 (cohesive units).
                 let time_unit = if cohesive { 1.0 } else { 1.0 / p.sqrt() };
-                (
-                    StageKind::Compress { pressure: *p },
-                    inertia_cap / time_unit,
-                )
+                (StageKind::Compress { pressure: *p }, inertia_cap / time_unit)
             }
             Step::FixedVolume { full_time, .. } => (
                 StageKind::FixedVolume {
@@ -436,11 +429,7 @@ pub fn header_lines(start: &Start, code: Code, deviations: &[String]) -> Vec<Str
 /// Formats a float so that it reads back to the same value (shortest round-trip form).
 pub fn num(x: f64) -> String {
     if x.is_infinite() {
-        return if x > 0.0 {
-            "1e300".into()
-        } else {
-            "-1e300".into()
-        };
+        return if x > 0.0 { "1e300".into() } else { "-1e300".into() };
     }
     let s = format!("{x:e}");
     // `1e0` → `1`, keep mantissa/exponent otherwise.

@@ -103,7 +103,8 @@ pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Snapshot, ImportError
         Code::Liggghts => liggghts::read_dir(dir, meta)?,
         Code::Yade => yade::read_dir(dir, meta)?,
         Code::Rust => {
-            return Snapshot::read(&dir.join("final.json")).map_err(|e| ImportError::new(dir, e))
+            return Snapshot::read(&dir.join("final.json"))
+                .map_err(|e| ImportError::new(dir, e))
         }
     };
     assemble(raw, meta).map_err(|m| ImportError::new(dir, m))
@@ -115,10 +116,7 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
     let d = meta.dimension;
     let n = raw.position.len();
     if raw.lengths.len() < d {
-        return Err(format!(
-            "cell has {} lengths, dimension {d}",
-            raw.lengths.len()
-        ));
+        return Err(format!("cell has {} lengths, dimension {d}", raw.lengths.len()));
     }
     if raw.radius.len() != n || raw.mass.len() != n {
         return Err(format!(
@@ -161,10 +159,7 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
             .collect();
         let dist = branch.iter().map(|x| x * x).sum::<f64>().sqrt();
         if dist == 0.0 {
-            return Err(format!(
-                "contact ({}, {}) joins coincident grains",
-                c.i, c.j
-            ));
+            return Err(format!("contact ({}, {}) joins coincident grains", c.i, c.j));
         }
         let mut force: Vec<f64> = branch.iter().map(|x| c.normal * x / dist).collect();
         for (a, t) in c.tangential.iter().take(d).enumerate() {
@@ -254,9 +249,9 @@ pub struct DumpSection {
 /// `ITEM: ATOMS …` or `ITEM: ENTRIES …`).
 pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
     let text = std::fs::read_to_string(path).map_err(|e| ImportError::new(path, e))?;
-    let start = text.rfind("ITEM: TIMESTEP").ok_or_else(|| {
-        ImportError::new(path, "no `ITEM: TIMESTEP` line: not a LAMMPS-style dump")
-    })?;
+    let start = text
+        .rfind("ITEM: TIMESTEP")
+        .ok_or_else(|| ImportError::new(path, "no `ITEM: TIMESTEP` line: not a LAMMPS-style dump"))?;
     let mut lines = text[start..].lines().peekable();
     let mut sec = DumpSection {
         timestep: 0,
@@ -335,7 +330,10 @@ impl DumpSection {
         self.columns.iter().position(|c| c == name).ok_or_else(|| {
             ImportError::new(
                 path,
-                format!("no column `{name}` (columns: {})", self.columns.join(" ")),
+                format!(
+                    "no column `{name}` (columns: {})",
+                    self.columns.join(" ")
+                ),
             )
         })
     }
@@ -344,11 +342,6 @@ impl DumpSection {
 /// Reads a one-word status file a deck writes at its end (`equilibrium`, `time-limit`).
 pub fn read_status(path: &Path) -> String {
     std::fs::read_to_string(path)
-        .map(|s| {
-            s.split_whitespace()
-                .last()
-                .unwrap_or("imported")
-                .to_string()
-        })
+        .map(|s| s.split_whitespace().last().unwrap_or("imported").to_string())
         .unwrap_or_else(|_| "imported".into())
 }
