@@ -258,3 +258,86 @@ fn lammps_convert_dir() {
     snap.write(&dir.join("final.json"))
         .expect("write final.json");
 }
+
+/// Writes the LAMMPS deck of the scene file `GB_SCENE` into `GB_OUT` (development helper, like
+/// `grainbench decks` without rebuilding the binary).
+#[test]
+#[ignore]
+fn lammps_write_deck() {
+    let (Some(scene), Some(out)) = (std::env::var_os("GB_SCENE"), std::env::var_os("GB_OUT"))
+    else {
+        eprintln!("set GB_SCENE and GB_OUT");
+        return;
+    };
+    let scene = Scene::from_file(Path::new(&scene)).expect("scene");
+    let start = Start::of(&scene).expect("start");
+    let deck = decks::deck(&start, Code::Lammps).expect("deck");
+    let out = Path::new(&out);
+    std::fs::create_dir_all(out).unwrap();
+    for (name, text) in &deck.files {
+        std::fs::write(out.join(name), text).unwrap();
+    }
+}
+
+/// 2D linear law (GRC07): two disks, K_N h + 2ζ√(m* K_N)·v normal force, K_T·u·t tangential.
+#[test]
+fn lammps_two_particle_linear_disks() {
+    if !lmp_present() {
+        return;
+    }
+    let (kn, zeta, mu) = (1e4, 0.8, 0.5);
+    let text = format!(
+        r#"
+name = "lammps-two-disks"
+description = "two disks"
+dimension = 2
+seed = 1
+[particles]
+count = 2
+[initial]
+packing_fraction = 0.01
+[law]
+kind = "linear"
+kappa = {kn}
+mu = {mu}
+zeta = {zeta}
+[[protocol]]
+kind = "compress"
+pressure = 1.0
+inertia_cap = 0.01
+max_time = 10.0
+criteria = {{ preset = "ar07" }}
+"#
+    );
+    let scene = Scene::from_toml(&text, Path::new("lammps-two-disks.toml")).expect("scene");
+    let disks = |h: f64, v1: [f64; 2], v2: [f64; 2], m: f64, steps: u64, dt: f64| {
+        let mut st = start(h, [0.0; 3], [0.0; 3], m, steps, dt);
+        st.scene = scene.clone();
+        st.dimension = 2;
+        st.lengths.truncate(2);
+        st.position = vec![vec![9.0, 10.0], vec![10.0 - h, 10.0]];
+        st.velocity = vec![v1.to_vec(), v2.to_vec()];
+        st.inertia = vec![0.125 * m, 0.125 * m];
+        st.stages[0].kappa = kn;
+        st.stages[0].mu = Mu::Finite(mu);
+        st
+    };
+    let h = 1e-3;
+    let v = 0.05;
+    let (n, _, _) = run(&disks(h, [v / 2.0, 0.0], [-v / 2.0, 0.0], 1.0, 0, 1e-4));
+    let want = kn * h + 2.0 * zeta * (0.5 * kn).sqrt() * v;
+    eprintln!(
+        "disks normal: lammps {n}, ours {want}, rel {:.2e}",
+        rel(n, want)
+    );
+    assert!(rel(n, want) < 1e-3);
+    let (u, k, dt) = (1e-2, 100, 1e-4);
+    let (n, t, _) = run(&disks(h, [0.0, -u / 2.0], [0.0, u / 2.0], 1e4, k, dt));
+    let want = -kn * u * k as f64 * dt;
+    eprintln!(
+        "disks tangential: lammps {t:?}, ours {want}, rel {:.2e}; N {n}",
+        rel(t[1], want)
+    );
+    assert!(want.abs() < mu * n);
+    assert!(rel(t[1], want) < 1e-3);
+}

@@ -226,15 +226,12 @@ pub fn support(code: Code, f: Feature) -> Support {
     use Support::*;
     match code {
         Code::Rust => Exact,
-        // Exact entries checked by tests/lammps_two_particle.rs (Hertz normal force, Tsuji
-        // damping, Mindlin K_T, rescale on unloading: all within 3e-4); 2D and linear decks
-        // are generated but not yet checked by a two-particle test.
+        // Exact entries checked by tests/lammps_two_particle.rs within 3e-4: Hertz normal force,
+        // Tsuji damping, Mindlin K_T, rescale on unloading (3D spheres); hooke K_N, damping,
+        // linear_history K_T (2D disks, m = d²). Disk inertia (nve/sphere disc) is not tested.
         Code::Lammps => match f {
             F::Coulomb => Approximate("Coulomb cap uses the total normal force (damping included)"),
             F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
-            F::LinearSprings => Approximate("hooke + linear_history (K_T given); not checked by a two-particle test"),
-            F::LinearDamping => Approximate("hooke with damping tsuji (c = 2ζ); not checked by a two-particle test"),
-            F::Disks => Approximate("enforce2d + nve/sphere disc, per-atom density for m = d²; not checked by a two-particle test"),
             F::Adhesion => Unsupported("pair_style granular has no pull −F0 with a linear attraction range (a hybrid/overlay table per size class is not generated yet)"),
             F::Rolling => Unsupported("rolling sds needs K_r/R_eff² and μ_r/R_eff per type pair; not generated yet for a continuous size distribution"),
             F::TangentialDamping => Unsupported("tangential damping in `linear_history` is not generated"),
