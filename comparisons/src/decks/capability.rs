@@ -226,16 +226,19 @@ pub fn support(code: Code, f: Feature) -> Support {
     use Support::*;
     match code {
         Code::Rust => Exact,
+        // Exact entries checked by tests/lammps_two_particle.rs within 3e-4: Hertz normal force,
+        // Tsuji damping, Mindlin K_T, rescale on unloading (3D spheres); hooke K_N, damping,
+        // linear_history K_T (2D disks, m = d²). Disk inertia (nve/sphere disc) is not tested.
         Code::Lammps => match f {
-            F::Coulomb => Approximate("Coulomb cap includes the damping (and table) normal force"),
+            F::Coulomb => Approximate("Coulomb cap uses the total normal force (damping included)"),
             F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
             F::Adhesion => Unsupported("pair_style granular has no pull −F0 with a linear attraction range (a hybrid/overlay table per size class is not generated yet)"),
             F::Rolling => Unsupported("rolling sds needs K_r/R_eff² and μ_r/R_eff per type pair; not generated yet for a continuous size distribution"),
             F::TangentialDamping => Unsupported("tangential damping in `linear_history` is not generated"),
-            F::StressControl => Approximate("fix press/berendsen: strain rate ∝ stress error (capped only while P < 2P_target), no cell mass"),
+            F::StressControl => Approximate("fix press/berendsen aniso on the virial stress: each axis' strain rate is (P − σ_αα)/(3Bτ), at the cap only while σ_αα ≈ 0, no cell mass"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::MultiStage => Approximate("each stage restarts the barostat; contact history carries over"),
-            F::EquilibriumCriteria => Approximate("kinetic energy of all grains (free spins included); criteria checked every check_every steps by fix halt"),
+            F::EquilibriumCriteria => Approximate("same measures (free spins of grains without contact left out), checked every check_every steps by fix halt on forces computed before that step's Berendsen dilation"),
             _ => Exact,
         },
         Code::Liggghts => match f {

@@ -1,14 +1,322 @@
-//! lammps deck generator.
+//! LAMMPS deck generator (Debian LAMMPS 29 Sep 2021, GRANULAR package, `shared/external-codes.md`).
+//!
+//! Files: `in.lammps` (input script) and `data.lammps` (atoms, `atom_style sphere`). Run as
+//! `lmp -in in.lammps -log log.lammps -screen none`-like with the deck directory as cwd. The
+//! run leaves `final.atoms` (`dump custom`), `final.contacts` (`dump local`) and `final.status`
+//! (`equilibrium` or `time-limit`), read back by [`crate::import::lammps`] (columns documented
+//! in `docs/external-formats/lammps.md`).
+//!
+//! Law (reduced units, `units lj`):
+//! * Hertz–Mindlin: `pair_style granular`, `hertz/material E e ν` with E = Ẽ(1−ν²), which
+//!   LAMMPS mixes back to 4/3·E/(2(1−ν²)) = (2/3)Ẽ, i.e. N = (2/3)Ẽ√(R* h) h (our law);
+//!   `damping tsuji` gives F_d = c(e)·√(m* k) ḣ with k = (2/3)Ẽ√(R* h) = (2/3)K_N, so our
+//!   2ζ√(m* K_N) needs c = √6·ζ: e is the root of the Tsuji polynomial c(e) = √6·ζ (negative
+//!   for ζ > 0.63; this LAMMPS has no range check). Tangential:
+//!   `mindlin_rescale/force NULL 0.0 μ` (K_T = 8G*a = (2−2ν)/(2−ν) K_N, incremental, rescaled
+//!   on unloading, no tangential damping).
+//! * Linear: `hooke K_N e` with `damping tsuji` (c = 2ζ, k = K_N) and
+//!   `tangential linear_history K_T 0.0 μ`.
+//! * μ = 0: `tangential linear_nohistory 0.0 0.0`; μ = ∞: μ = 1e300.
+//!
+//! Stages: `Compress` is `fix press/berendsen iso P P τ modulus B dilate all` on the virial
+//! pressure. Its linear dilation per step is (1 − dt/τ·(P_t − P)/B)^{1/3} (fix_press_berendsen.cpp,
+//! in 2D too), i.e. a strain rate −(P_t − P)/(3Bτ): we take τ = 1 and B = P_t/(3 ε̇_max) so that
+//! the initial rate (P ≈ 0) is the stage's cap. `FixedVolume` has no barostat. Each stage is a
+//! single `run` (no chunks: `mindlin_rescale` re-applies its rescale at each run setup) stopped
+//! by `fix halt` on an equal-style variable that is 1 when all criteria hold, checked every
+//! `check_every` steps.
 
-use super::{Code, Deck, Start};
+use super::{header_lines, num, Code, Deck, StageKind, Start};
+use grainbench_engine::scene::{Law, Mu};
+use std::f64::consts::PI;
+use std::fmt::Write as _;
 
-/// The lammps deck of `start`.
-pub fn deck(start: &Start, deviations: &[String]) -> Deck {
-    let _ = (start, deviations);
-    Deck {
-        code: Code::Yade,
-        files: Vec::new(),
-        deviations: Vec::new(),
-        args: Vec::new(),
+/// Tsuji et al. damping coefficient of a restitution `e`, as LAMMPS `damping tsuji`
+/// computes it (pair_granular.cpp).
+pub fn tsuji_coefficient(e: f64) -> f64 {
+    1.2728 - 4.2783 * e + 11.087 * e.powi(2) - 22.348 * e.powi(3) + 27.467 * e.powi(4)
+        - 18.022 * e.powi(5)
+        + 4.8218 * e.powi(6)
+}
+
+/// The restitution `e` in [−1, 1) for which LAMMPS `damping tsuji` gives the coefficient `c`
+/// (negative when c > 1.2728, i.e. above ζ ≈ 0.52 in Hertz units). Bisection: the polynomial
+/// decreases on [−1, 1].
+pub fn tsuji_restitution(c: f64) -> f64 {
+    let (mut lo, mut hi) = (-1.0_f64, 1.0_f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if tsuji_coefficient(mid) > c {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
     }
+    0.5 * (lo + hi)
+}
+
+fn mu_text(mu: Mu) -> String {
+    match mu {
+        Mu::Infinite => num(f64::INFINITY),
+        Mu::Finite(x) => num(x),
+    }
+}
+
+/// `pair_coeff * * …` of the scene's law at stiffness parameter `kappa` and friction `mu`.
+fn pair_coeff(law: &Law, kappa: f64, mu: Mu) -> String {
+    let tangential = |kt: &str| -> String {
+        if mu.value() > 0.0 {
+            format!("tangential {kt} 0.0 {}", mu_text(mu))
+        } else {
+            "tangential linear_nohistory 0.0 0.0".into()
+        }
+    };
+    match law {
+        Law::HertzMindlin { zeta, poisson, .. } => {
+            // κ = (Ẽ/P)^(2/3) with P = 1 (AR07 (21)).
+            let e_tilde = kappa.powf(1.5);
+            let e = tsuji_restitution(6f64.sqrt() * zeta);
+            let t = if mu.value() > 0.0 {
+                tangential("mindlin_rescale/force NULL")
+            } else {
+                tangential("")
+            };
+            format!(
+                "pair_coeff * * hertz/material {} {} {} {t} damping tsuji",
+                num(e_tilde * (1.0 - poisson * poisson)),
+                num(e),
+                num(*poisson)
+            )
+        }
+        Law::Linear {
+            zeta, kt_over_kn, ..
+        } => {
+            // κ = K_N/P (cohesionless, P = 1).
+            let e = tsuji_restitution(2.0 * zeta);
+            let t = tangential(&format!("linear_history {}", num(kappa * kt_over_kn)));
+            format!(
+                "pair_coeff * * hooke {} {} {t} damping tsuji",
+                num(kappa),
+                num(e)
+            )
+        }
+    }
+}
+
+/// The LAMMPS deck of `start`.
+pub fn deck(start: &Start, deviations: &[String]) -> Deck {
+    Deck {
+        code: Code::Lammps,
+        files: vec![
+            ("in.lammps".into(), input(start, deviations)),
+            ("data.lammps".into(), data(start)),
+        ],
+        deviations: deviations.to_vec(),
+        args: vec![
+            "-in".into(),
+            "in.lammps".into(),
+            "-log".into(),
+            "log.lammps".into(),
+            "-nocite".into(),
+        ],
+    }
+}
+
+fn data(start: &Start) -> String {
+    let d3 = start.dimension == 3;
+    let mut s = format!("grainbench start of scene {}\n\n", start.scene.name);
+    let _ = writeln!(s, "{} atoms\n1 atom types\n", start.n());
+    let axes = ["x", "y", "z"];
+    for (a, ax) in axes.iter().enumerate() {
+        let hi = if a < start.dimension {
+            num(start.lengths[a])
+        } else {
+            "0.5".into()
+        };
+        let lo = if a < start.dimension { "0" } else { "-0.5" };
+        let _ = writeln!(s, "{lo} {hi} {ax}lo {ax}hi");
+    }
+    s.push_str("\nAtoms # sphere\n\n");
+    for i in 0..start.n() {
+        let d = start.diameter[i];
+        // read_data sets m = ρ·πd³/6 in 2D as in 3D: give ρ per atom so that m is ours.
+        let rho = start.mass[i] / (PI * d * d * d / 6.0);
+        let p = &start.position[i];
+        let z = if d3 { num(p[2]) } else { "0".into() };
+        let _ = writeln!(
+            s,
+            "{} 1 {} {} {} {} {z}",
+            i + 1,
+            num(d),
+            num(rho),
+            num(p[0]),
+            num(p[1])
+        );
+    }
+    if start.velocity.iter().flatten().any(|&v| v != 0.0) {
+        s.push_str("\nVelocities\n\n");
+        for (i, v) in start.velocity.iter().enumerate() {
+            let vz = if d3 { num(v[2]) } else { "0".into() };
+            let _ = writeln!(s, "{} {} {} {vz} 0 0 0", i + 1, num(v[0]), num(v[1]));
+        }
+    }
+    s
+}
+
+fn input(start: &Start, deviations: &[String]) -> String {
+    let d3 = start.dimension == 3;
+    let n = start.n();
+    let mut s = String::new();
+    for h in header_lines(start, Code::Lammps, deviations) {
+        let _ = writeln!(s, "# {h}");
+    }
+    let solid: f64 = start
+        .diameter
+        .iter()
+        .map(|&x| {
+            if d3 {
+                PI * x * x * x / 6.0
+            } else {
+                PI * x * x / 4.0
+            }
+        })
+        .sum();
+    let friction = start.stages.iter().any(|st| st.mu.value() > 0.0);
+    let inertia = if d3 { "0.4" } else { "0.5" };
+    let omega2 = if d3 {
+        "c_pa[7]^2+c_pa[8]^2+c_pa[9]^2"
+    } else {
+        "c_pa[9]^2"
+    };
+    let f2 = if d3 {
+        "c_pa[1]^2+c_pa[2]^2+c_pa[3]^2"
+    } else {
+        "c_pa[1]^2+c_pa[2]^2"
+    };
+    let t2 = if d3 {
+        "c_pa[4]^2+c_pa[5]^2+c_pa[6]^2"
+    } else {
+        "c_pa[6]^2"
+    };
+    let v2 = if d3 { "vx^2+vy^2+vz^2" } else { "vx^2+vy^2" };
+    let _ = write!(
+        s,
+        "\nunits lj\n\
+         atom_style sphere\n\
+         dimension {dim}\n\
+         boundary p p p\n\
+         atom_modify map array\n\
+         comm_modify vel yes\n\
+         read_data data.lammps\n\
+         pair_style granular\n\
+         {coeff}\n\
+         neighbor 0.2 bin\n\
+         neigh_modify delay 0 every 1 check yes\n\
+         fix integ all nve/sphere{disc}\n\
+         {e2d}\
+         \n\
+         # Equilibrium measures (SPEC §3, as our engine's): largest net force and torque on a\n\
+         # grain, diagonal virial stress (compressive positive, force/a^(d-1)), kinetic energy\n\
+         # per grain: translation of all grains, rotation of grains with a contact (I = {inertia} m r²).\n\
+         compute pvir all pressure NULL virial\n\
+         compute pa all property/atom fx fy fz tqx tqy tqz omegax omegay omegaz radius\n\
+         compute cn all contact/atom\n\
+         variable fmag atom sqrt({f2})\n\
+         variable tmag atom sqrt({t2})\n\
+         variable ek atom 0.5*mass*({v2})+(c_cn>0)*0.5*{inertia}*mass*c_pa[10]^2*({omega2})\n\
+         compute fmax all reduce max v_fmag v_tmag\n\
+         compute eksum all reduce sum v_ek\n\
+         variable kpg equal c_eksum/{n}\n\
+         variable phi equal {solid}/vol\n\
+         # Contacts: pair/local dist, normal force on I (fx fy fz), tangential (p1 p2 p3).\n\
+         compute pl all pair/local dist fx fy fz p1 p2 p3 cutoff radius\n\
+         compute prl all property/local patom1 patom2 cutoff radius\n",
+        dim = start.dimension,
+        coeff = start
+            .stages
+            .first()
+            .map(|st| pair_coeff(start.law(), st.kappa, st.mu))
+            .unwrap_or_else(|| pair_coeff(start.law(), start.law().kappa(), Mu::Finite(0.0))),
+        disc = if d3 { "" } else { " disc" },
+        e2d = if d3 { "" } else { "fix e2d all enforce2d\n" },
+        solid = num(solid),
+    );
+    for (k, st) in start.stages.iter().enumerate() {
+        let tol = st.tolerances;
+        let k1 = k + 1;
+        let _ = writeln!(s, "\n# Stage {k1}: {:?}", st.kind);
+        let _ = writeln!(s, "timestep {}", num(st.dt));
+        if k > 0 {
+            let _ = writeln!(s, "{}", pair_coeff(start.law(), st.kappa, st.mu));
+        }
+        let mut crit = vec![
+            format!("(c_fmax[1]<{})", num(tol.force)),
+            format!("(v_kpg<{})", num(tol.kinetic_per_grain)),
+        ];
+        if friction && st.mu.value() > 0.0 {
+            crit.push(format!("(c_fmax[2]<{})", num(tol.moment)));
+        }
+        if let StageKind::Compress { pressure } = st.kind {
+            let b = pressure / (3.0 * st.max_strain_rate);
+            let _ = writeln!(
+                s,
+                "# Berendsen: strain rate -(P_t - P)/(3 B tau); tau = 1, B = P_t/(3 rate cap) = {}",
+                num(b)
+            );
+            let _ = writeln!(
+                s,
+                "fix baro all press/berendsen aniso {p} {p} 1 modulus {b} dilate all\n\
+                 fix_modify baro press pvir",
+                p = num(pressure),
+                b = num(b)
+            );
+            for a in 1..=start.dimension {
+                crit.push(format!(
+                    "(abs(c_pvir[{a}]-{})<{})",
+                    num(pressure),
+                    num(tol.stress)
+                ));
+            }
+        }
+        let _ = writeln!(s, "variable ok{k1} equal {}", crit.join("*"));
+        let _ = writeln!(
+            s,
+            "thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k1}\n\
+             thermo_modify norm no flush yes\n\
+             thermo {}",
+            st.check_every
+        );
+        let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
+        if !full_time {
+            let _ = writeln!(
+                s,
+                "fix halt all halt {} v_ok{k1} > 0.5 error continue",
+                st.check_every
+            );
+        }
+        let _ = writeln!(s, "run {}", st.max_steps);
+        // The thermo line at the run's last step invokes the computes v_ok reads.
+        let _ = writeln!(
+            s,
+            "if \"${{ok{k1}}} > 0.5\" then \"variable status string equilibrium\" else \"variable status string time-limit\""
+        );
+        if !full_time {
+            s.push_str("unfix halt\n");
+        }
+        if matches!(st.kind, StageKind::Compress { .. }) {
+            s.push_str("unfix baro\n");
+        }
+    }
+    s.push_str(
+        "\n# Final state (columns: docs/external-formats/lammps.md). The contacts are dumped at the\n\
+         # setup of a `run 0` (no history update, forces from the final velocities), the atoms after\n\
+         # it so that their fx fy fz are the same forces.\n\
+         dump fc all local 1 final.contacts c_prl[1] c_prl[2] c_pl[1] c_pl[2] c_pl[3] c_pl[4] c_pl[5] c_pl[6] c_pl[7]\n\
+         dump_modify fc format float %.17g\n\
+         run 0\n\
+         undump fc\n\
+         write_dump all custom final.atoms id radius mass x y z vx vy vz omegax omegay omegaz fx fy fz modify format float %.17g time yes\n\
+         print \"${status}\" file final.status\n",
+    );
+    s
 }

@@ -1,0 +1,343 @@
+//! Two spheres in a big periodic box run by `lmp` from a deck of `decks::lammps`, read back
+//! by `import::lammps`, compared with our Hertz–Mindlin law (normal force, damping force,
+//! tangential stiffness). Skipped when `lmp` is missing (fails when `CI` is set).
+
+use grainbench_comparisons::decks::{self, Code, Stage, StageKind, Start, Tolerances};
+use grainbench_comparisons::import::{self, last_dump_frame, Meta};
+use grainbench_engine::contact::hertz_mindlin::HertzMindlin;
+use grainbench_engine::scene::{Mu, Scene};
+use std::path::Path;
+use std::process::Command;
+
+const KAPPA: f64 = 1e4;
+const ZETA: f64 = 0.98;
+const NU: f64 = 0.3;
+const MU: f64 = 0.3;
+
+fn lmp_present() -> bool {
+    let ok = Command::new("lmp")
+        .arg("-h")
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !ok {
+        if std::env::var_os("CI").is_some() {
+            panic!("lmp is not installed (CI is set): apt-get install lammps");
+        }
+        eprintln!("skipping: lmp not found on PATH");
+    }
+    ok
+}
+
+fn scene() -> Scene {
+    let text = format!(
+        r#"
+name = "lammps-two-particle"
+description = "two spheres"
+dimension = 3
+seed = 1
+[particles]
+count = 2
+[initial]
+packing_fraction = 0.01
+[law]
+kind = "hertz-mindlin"
+kappa = {KAPPA}
+mu = {MU}
+zeta = {ZETA}
+poisson = {NU}
+[[protocol]]
+kind = "compress"
+pressure = 1.0
+inertia_cap = 0.01
+max_time = 10.0
+criteria = {{ preset = "ar07" }}
+"#
+    );
+    Scene::from_toml(&text, Path::new("lammps-two-particle.toml")).expect("scene")
+}
+
+/// Two unit spheres along x at overlap `h`, velocities `v1`, `v2`, masses `m`, `steps` steps
+/// of `dt` in a fixed 20³ cell.
+fn start(h: f64, v1: [f64; 3], v2: [f64; 3], m: f64, steps: u64, dt: f64) -> Start {
+    Start {
+        scene: scene(),
+        dimension: 3,
+        lengths: vec![20.0; 3],
+        position: vec![vec![9.0, 10.0, 10.0], vec![10.0 - h, 10.0, 10.0]],
+        velocity: vec![v1.to_vec(), v2.to_vec()],
+        diameter: vec![1.0, 1.0],
+        mass: vec![m, m],
+        inertia: vec![0.1 * m, 0.1 * m],
+        prelude: Vec::new(),
+        stages: vec![Stage {
+            kind: StageKind::FixedVolume { full_time: true },
+            max_strain_rate: 0.0,
+            max_time: steps as f64 * dt,
+            max_steps: steps,
+            mu: Mu::Finite(MU),
+            kappa: KAPPA,
+            dt,
+            tolerances: Tolerances {
+                force: 1e-4,
+                moment: 1e-4,
+                stress: 1e-4,
+                kinetic_per_grain: 1e-8,
+            },
+            check_every: 10,
+        }],
+    }
+}
+
+/// Runs the deck; returns the imported contact (normal, tangential on atom 2) and the net
+/// force on atom 2 as LAMMPS wrote it minus N·n (n from atom 1 to 2): the tangential force on
+/// atom 2 seen by LAMMPS itself.
+fn run(start: &Start) -> (f64, Vec<f64>, Vec<f64>) {
+    let (n, t, f, _) = run_h(start);
+    (n, t, f)
+}
+
+/// [`run`], and the final overlap.
+fn run_h(start: &Start) -> (f64, Vec<f64>, Vec<f64>, f64) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let deck = decks::deck(start, Code::Lammps).expect("deck");
+    for (name, text) in &deck.files {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    let out = Command::new("lmp")
+        .args(&deck.args)
+        .args(["-screen", "none"])
+        .current_dir(dir.path())
+        .output()
+        .expect("lmp runs");
+    let log = std::fs::read_to_string(dir.path().join("log.lammps")).unwrap_or_default();
+    assert!(out.status.success(), "lmp failed:\n{log}");
+    let meta = Meta::read(dir.path()).unwrap();
+    let raw = import::lammps::read_dir(dir.path(), &meta).expect("read");
+    assert_eq!(raw.contacts.len(), 1, "one contact:\n{log}");
+    let c = &raw.contacts[0];
+    let (n, t) = if (c.i, c.j) == (0, 1) {
+        (c.normal, c.tangential.clone())
+    } else {
+        // The reader's tangential is on j: swap to have it on atom 2.
+        (c.normal, c.tangential.iter().map(|x| -x).collect())
+    };
+    let atoms = last_dump_frame(&dir.path().join("final.atoms")).unwrap();
+    let p = dir.path().join("final.atoms");
+    let (cid, cf) = (atoms.col(&p, "id").unwrap(), atoms.col(&p, "fx").unwrap());
+    let cx = atoms.col(&p, "x").unwrap();
+    let row = |id: f64| atoms.rows.iter().find(|r| r[cid] == id).unwrap();
+    let (r1, r2) = (row(1.0), row(2.0));
+    let b: Vec<f64> = (0..3).map(|a| r2[cx + a] - r1[cx + a]).collect();
+    let len = b.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let f2t: Vec<f64> = (0..3).map(|a| r2[cf + a] - n * b[a] / len).collect();
+    if std::env::var_os("GB_KEEP").is_some() {
+        eprintln!("kept {}", dir.keep().display());
+    }
+    (n, t, f2t, 1.0 - len)
+}
+
+fn law() -> HertzMindlin<()> {
+    HertzMindlin::new(KAPPA.powf(1.5), NU, ZETA, ())
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+#[test]
+fn lammps_two_particle_hertz_mindlin() {
+    if !lmp_present() {
+        return;
+    }
+    let law = law();
+    let r_eff = 0.25;
+    let h = 1e-3;
+
+    // Normal force at rest (0 steps): N = (2/3)Ẽ√(R*h)h; on atom 2 along +x.
+    let (n, t, f2) = run(&start(h, [0.0; 3], [0.0; 3], 1.0, 0, 1e-4));
+    let want = law.normal_force(h, r_eff);
+    eprintln!("normal: lammps {n}, ours {want}, rel {:.2e}", rel(n, want));
+    assert!(rel(n, want) < 1e-3);
+    assert!(
+        f2.iter().chain(&t).all(|x| x.abs() < 1e-9 * want),
+        "{f2:?} {t:?}"
+    );
+
+    // Damping: approaching at v (m = 1, m* = 1/2): N = N_e + 2ζ√(m* K_N)·v.
+    let v = 0.05;
+    let (n, _, _) = run(&start(
+        h,
+        [v / 2.0, 0.0, 0.0],
+        [-v / 2.0, 0.0, 0.0],
+        1.0,
+        0,
+        1e-4,
+    ));
+    let damp = 2.0 * ZETA * (0.5 * law.normal_stiffness(h, r_eff)).sqrt() * v;
+    let want = law.normal_force(h, r_eff) + damp;
+    eprintln!(
+        "damped normal: lammps {n}, ours {want} (viscous {damp}), rel {:.2e}",
+        rel(n, want)
+    );
+    assert!(rel(n, want) < 1e-3);
+
+    // Tangential stiffness: heavy grains (m = 1e4: negligible acceleration, viscous force ~1e-3 N), relative tangential velocity u
+    // along y for k steps: T on atom 2 = −K_T·u·k·dt, K_T = (2−2ν)/(2−ν) Ẽ√(R*h).
+    let (u, k, dt) = (1e-2, 100, 1e-4);
+    let (n, t, f2) = run(&start(
+        h,
+        [0.0, -u / 2.0, 0.0],
+        [0.0, u / 2.0, 0.0],
+        1e4,
+        k,
+        dt,
+    ));
+    let kt = law.kt_ratio * law.normal_stiffness(h, r_eff);
+    let delta = u * k as f64 * dt;
+    let want = -kt * delta;
+    eprintln!(
+        "tangential: lammps {:?}, ours {want} (K_T {kt}), rel {:.2e}; N {n}; f2 {f2:?}",
+        t,
+        rel(t[1], want)
+    );
+    assert!(want.abs() < MU * n, "test must stay below sliding");
+    assert!(rel(t[1], want) < 1e-3, "T {t:?} vs {want}");
+    // The reader's sign convention agrees with the net force LAMMPS applied to atom 2.
+    assert!(
+        (0..3).all(|a| (f2[a] - t[a]).abs() < 1e-9),
+        "{f2:?} vs {t:?}"
+    );
+
+    // Unloading (AR07 App. A): the same tangential motion while the grains separate at w, μ = ∞,
+    // very heavy grains (the viscous pull stays harmless). Rescaling T by K_T(h')/K_T(h) at each
+    // decrease, then adding K_T(h')·u·dt, gives T = K_T(h_end)·u·t; without the rescale T would be
+    // Σ K_T(h_k) u dt, about 15 % more here (h: 1e-3 → 5e-4).
+    let w = 5e-2;
+    let mut st = start(
+        h,
+        [-w / 2.0, -u / 2.0, 0.0],
+        [w / 2.0, u / 2.0, 0.0],
+        1e8,
+        k,
+        dt,
+    );
+    st.stages[0].mu = Mu::Infinite;
+    let (_, t, _, h_end) = run_h(&st);
+    let want = -law.kt_ratio * law.normal_stiffness(h_end, r_eff) * delta;
+    eprintln!(
+        "unloading: h_end {h_end:.6e}, lammps T {:?}, ours {want}, rel {:.2e}",
+        t,
+        rel(t[1], want)
+    );
+    assert!(h_end < 0.6 * h);
+    assert!(rel(t[1], want) < 2e-3, "T {t:?} vs {want}");
+}
+
+/// Converts a finished LAMMPS deck directory (env `GB_LAMMPS_DIR`, with its `deck.json`) into
+/// our snapshot `final.json` in the same directory, for `grainbench analyze`:
+/// `GB_LAMMPS_DIR=/tmp/lmp-smoke/lammps cargo test --release --test lammps_two_particle -- --ignored`.
+#[test]
+#[ignore]
+fn lammps_convert_dir() {
+    let Some(dir) = std::env::var_os("GB_LAMMPS_DIR") else {
+        eprintln!("set GB_LAMMPS_DIR");
+        return;
+    };
+    let dir = Path::new(&dir);
+    let meta = Meta::read(dir).expect("deck.json");
+    let snap = import::read(Code::Lammps, dir, &meta).expect("import");
+    eprintln!(
+        "{}: step {}, time {}, status {}, {} contacts",
+        dir.display(),
+        snap.step,
+        snap.time,
+        snap.status,
+        snap.contacts.len()
+    );
+    snap.write(&dir.join("final.json"))
+        .expect("write final.json");
+}
+
+/// Writes the LAMMPS deck of the scene file `GB_SCENE` into `GB_OUT` (development helper, like
+/// `grainbench decks` without rebuilding the binary).
+#[test]
+#[ignore]
+fn lammps_write_deck() {
+    let (Some(scene), Some(out)) = (std::env::var_os("GB_SCENE"), std::env::var_os("GB_OUT"))
+    else {
+        eprintln!("set GB_SCENE and GB_OUT");
+        return;
+    };
+    let scene = Scene::from_file(Path::new(&scene)).expect("scene");
+    let start = Start::of(&scene).expect("start");
+    let deck = decks::deck(&start, Code::Lammps).expect("deck");
+    let out = Path::new(&out);
+    std::fs::create_dir_all(out).unwrap();
+    for (name, text) in &deck.files {
+        std::fs::write(out.join(name), text).unwrap();
+    }
+}
+
+/// 2D linear law (GRC07): two disks, K_N h + 2ζ√(m* K_N)·v normal force, K_T·u·t tangential.
+#[test]
+fn lammps_two_particle_linear_disks() {
+    if !lmp_present() {
+        return;
+    }
+    let (kn, zeta, mu) = (1e4, 0.8, 0.5);
+    let text = format!(
+        r#"
+name = "lammps-two-disks"
+description = "two disks"
+dimension = 2
+seed = 1
+[particles]
+count = 2
+[initial]
+packing_fraction = 0.01
+[law]
+kind = "linear"
+kappa = {kn}
+mu = {mu}
+zeta = {zeta}
+[[protocol]]
+kind = "compress"
+pressure = 1.0
+inertia_cap = 0.01
+max_time = 10.0
+criteria = {{ preset = "ar07" }}
+"#
+    );
+    let scene = Scene::from_toml(&text, Path::new("lammps-two-disks.toml")).expect("scene");
+    let disks = |h: f64, v1: [f64; 2], v2: [f64; 2], m: f64, steps: u64, dt: f64| {
+        let mut st = start(h, [0.0; 3], [0.0; 3], m, steps, dt);
+        st.scene = scene.clone();
+        st.dimension = 2;
+        st.lengths.truncate(2);
+        st.position = vec![vec![9.0, 10.0], vec![10.0 - h, 10.0]];
+        st.velocity = vec![v1.to_vec(), v2.to_vec()];
+        st.inertia = vec![0.125 * m, 0.125 * m];
+        st.stages[0].kappa = kn;
+        st.stages[0].mu = Mu::Finite(mu);
+        st
+    };
+    let h = 1e-3;
+    let v = 0.05;
+    let (n, _, _) = run(&disks(h, [v / 2.0, 0.0], [-v / 2.0, 0.0], 1.0, 0, 1e-4));
+    let want = kn * h + 2.0 * zeta * (0.5 * kn).sqrt() * v;
+    eprintln!(
+        "disks normal: lammps {n}, ours {want}, rel {:.2e}",
+        rel(n, want)
+    );
+    assert!(rel(n, want) < 1e-3);
+    let (u, k, dt) = (1e-2, 100, 1e-4);
+    let (n, t, _) = run(&disks(h, [0.0, -u / 2.0], [0.0, u / 2.0], 1e4, k, dt));
+    let want = -kn * u * k as f64 * dt;
+    eprintln!(
+        "disks tangential: lammps {t:?}, ours {want}, rel {:.2e}; N {n}",
+        rel(t[1], want)
+    );
+    assert!(want.abs() < mu * n);
+    assert!(rel(t[1], want) < 1e-3);
+}
