@@ -270,3 +270,27 @@ fn yade_two_particle() {
     );
     assert!(err_d <= 1e-3, "Coulomb");
 }
+
+/// Converts and analyses a finished YADE deck run (`YADE_SMOKE_DIR`, default
+/// `/tmp/yade-smoke/yade`): `cargo test --test yade_two_particle -- --ignored --nocapture`.
+#[test]
+#[ignore = "needs a finished YADE run of a generated deck"]
+fn yade_smoke_import() {
+    let dir = std::path::PathBuf::from(
+        std::env::var("YADE_SMOKE_DIR").unwrap_or_else(|_| "/tmp/yade-smoke/yade".into()),
+    );
+    let meta = Meta::read(&dir).expect("deck.json");
+    let snap = import::read(Code::Yade, &dir, &meta).expect("export converts");
+    let a = grainbench_comparisons::analyze(&snap, &Default::default());
+    eprintln!(
+        "{}: status {}, step {}, t = {}",
+        dir.display(),
+        a.status,
+        a.step,
+        a.time
+    );
+    for (k, v) in a.metric_values() {
+        eprintln!("{k} = {v:.6}");
+    }
+    assert_eq!(snap.particles.radius.len(), meta.n);
+}

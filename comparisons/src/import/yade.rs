@@ -100,7 +100,7 @@ fn read_cell(path: &Path) -> Result<(Vec<f64>, u64, f64), ImportError> {
                     .map(|x| x.parse::<f64>())
                     .collect::<Result<_, _>>()
                     .map_err(|e| bad(&e))?;
-                if v.len() != 3 || v.iter().any(|x| !(*x > 0.0)) {
+                if v.len() != 3 || v.iter().any(|x| x.is_nan() || *x <= 0.0) {
                     return Err(bad(&"expected three positive lengths"));
                 }
                 lengths = Some(v);
