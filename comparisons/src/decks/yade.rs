@@ -223,6 +223,9 @@ def set_law(kappa, mu):
 KAPPA_NOW = KAPPA0
 
 
+KE_PARTS = [0.0, 0.0]
+
+
 def measures(st):
     """The criteria of stage st: (ok, max force, max torque, stress deviation, KE/grain, σ)."""
     fmax = 0.0
@@ -236,15 +239,17 @@ def measures(st):
             touching.add(i.id1)
             touching.add(i.id2)
     grad = O.cell.velGrad
-    ke = 0.0
+    ke_t = 0.0
+    ke_r = 0.0
     for b in O.bodies:
         v = b.state.vel - grad * b.state.pos
-        ke += 0.5 * b.state.mass * v.squaredNorm()
+        ke_t += 0.5 * b.state.mass * v.squaredNorm()
         if b.id in touching:
             w = b.state.angVel
-            ke += 0.5 * (b.state.inertia[0] * w[0] ** 2 + b.state.inertia[1] * w[1] ** 2
-                         + b.state.inertia[2] * w[2] ** 2)
-    ke /= N
+            ke_r += 0.5 * (b.state.inertia[0] * w[0] ** 2 + b.state.inertia[1] * w[1] ** 2
+                           + b.state.inertia[2] * w[2] ** 2)
+    ke = (ke_t + ke_r) / N
+    KE_PARTS[:] = [ke_t / N, ke_r / N]
     s = utils.getStress()  # tension positive, contact part only
     sig = [-s[a, a] for a in range(3)]
     if st['kind'] == 'compress':
@@ -283,9 +288,9 @@ for k, st in enumerate(STAGES):
         steps += n
         ok, fmax, tmax, dev, ke, sig = measures(st)
         print('stage %d (%s) step %d t=%.6g phi=%.6f P=%.6g F=%.3g/%.3g M=%.3g/%.3g dS=%.3g/%.3g '
-              'KE=%.3g/%.3g wall=%.1fs' % (k, st['kind'], O.iter, O.time, packing_fraction(),
-              sum(sig) / 3.0, fmax, st['tol_force'], tmax, st['tol_moment'], dev, st['tol_stress'],
-              ke, st['tol_kinetic'], time.time() - t0))
+              'KE=%.3g/%.3g (rot %.2g) wall=%.1fs' % (k, st['kind'], O.iter, O.time,
+              packing_fraction(), sum(sig) / 3.0, fmax, st['tol_force'], tmax, st['tol_moment'],
+              dev, st['tol_stress'], ke, st['tol_kinetic'], KE_PARTS[1], time.time() - t0))
         sys.stdout.flush()
         if ok:
             status = 'equilibrium'
