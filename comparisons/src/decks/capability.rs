@@ -256,7 +256,7 @@ pub fn support(code: Code, f: Feature) -> Support {
         Code::Yade => match f {
             F::MindlinTangential => Approximate("K_T exact; Ig2_Sphere_Sphere_ScGeom scales the relative translational slip by (R1+R2)/d = 1 + h/(R1+R2)"),
             F::MindlinUnloading => Approximate("Law2_ScGeom_MindlinPhys_Mindlin keeps T when N drops"),
-            F::HertzDamping => Approximate("total normal force clipped at 0 (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3), a clipped contact loses its tangential force; viscous force scaled by (R1+R2)/d"),
+            F::HertzDamping => Approximate("total normal force clipped at 0 (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force; viscous force scaled by (R1+R2)/d"),
             F::Coulomb => Approximate("Coulomb cap uses the total normal force (viscous part included)"),
             F::NoSlip => Approximate("μ = ∞ given as friction angle atan(1e300) (tan ≈ 1.6e16); T still drops to 0 while the total normal force is clipped"),
             F::LinearSprings | F::LinearDamping => Unsupported("Law2_ScGeom_FrictPhys_CundallStrack has no dashpot and ViscElPhys is wrong in a deforming periodic cell"),
