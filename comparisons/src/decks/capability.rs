@@ -71,12 +71,14 @@ pub enum Feature {
     EquilibriumCriteria,
     /// Hard-grain stages before the first DEM stage (melting, growth, expansion).
     HardGrainPrelude,
+    /// Hard-grain stages between DEM stages (AR07 §IV.B state C: expand, mix, compress again).
+    HardGrainInterlude,
     /// Per-contact dump (pair, branch, N, T, rolling moment).
     ContactDump,
 }
 
 impl Feature {
-    pub const ALL: [Feature; 20] = [
+    pub const ALL: [Feature; 21] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -96,6 +98,7 @@ impl Feature {
         Feature::MultiStage,
         Feature::EquilibriumCriteria,
         Feature::HardGrainPrelude,
+        Feature::HardGrainInterlude,
         Feature::ContactDump,
     ];
 
@@ -120,6 +123,7 @@ impl Feature {
             Feature::MultiStage => "multi-stage",
             Feature::EquilibriumCriteria => "equilibrium-criteria",
             Feature::HardGrainPrelude => "hard-grain-prelude",
+            Feature::HardGrainInterlude => "hard-grain-interlude",
             Feature::ContactDump => "contact-dump",
         }
     }
@@ -145,6 +149,7 @@ impl Feature {
             Feature::MultiStage => "several DEM stages (pressure or κ programs)",
             Feature::EquilibriumCriteria => "force, moment, stress and kinetic-energy criteria",
             Feature::HardGrainPrelude => "hard-grain stages before the first DEM stage",
+            Feature::HardGrainInterlude => "hard-grain stages between DEM stages (AR07 state C)",
             Feature::ContactDump => "per-contact dump: pair, branch, N, T, rolling moment",
         }
     }
@@ -214,11 +219,16 @@ pub fn features(start: &Start) -> Vec<Feature> {
     if !start.prelude.is_empty() {
         f.push(Feature::HardGrainPrelude);
     }
+    if !start.interlude.is_empty() {
+        f.push(Feature::HardGrainInterlude);
+    }
     f.push(Feature::ContactDump);
     f.sort();
     f.dedup();
     f
 }
+
+const INTERLUDE: &str = "no event-driven hard-grain dynamics; grainbench prepares hard-grain stages only before the first DEM stage";
 
 /// The matrix.
 pub fn support(code: Code, f: Feature) -> Support {
@@ -237,6 +247,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::TangentialDamping => Unsupported("tangential damping in `linear_history` is not generated"),
             F::StressControl => Approximate("fix press/berendsen aniso on the virial stress: each axis' strain rate is (P − σ_αα)/(3Bτ), at the cap only while σ_αα ≈ 0, no cell mass"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the barostat; contact history carries over"),
             F::EquilibriumCriteria => Approximate("same measures (free spins of grains without contact left out), checked every check_every steps by fix halt on forces computed before that step's Berendsen dilation"),
             _ => Exact,
@@ -254,6 +265,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Disks => Unsupported("2D decks not generated for LIGGGHTS"),
             F::StressControl => Approximate("no barostat fix: per-axis servo of fix deform, strain rate ∝ virial stress error (full cap beyond 50 % of the target), no cell mass"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the servo; contact history carries over"),
             F::EquilibriumCriteria => Approximate("criteria as ours (kinetic energy: translation of all grains, rotation of grains with a contact), checked between runs of check_every steps"),
             _ => Exact,
@@ -271,6 +283,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Disks => Unsupported("2D disks (blockedDOFs emulation) not generated"),
             F::StressControl => Approximate("AR07 (7) cell dynamics and rate cap integrated by a script servo (PyRunner each step, O.cell.velGrad) on the contact stress only; PeriTriaxController hunted around 1.01–1.09 P"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("κ and μ changes rescale kno, kso and tan φ of existing contacts (not checked by a test)"),
             _ => Exact,
         },

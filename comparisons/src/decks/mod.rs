@@ -146,6 +146,8 @@ pub struct Start {
     pub inertia: Vec<f64>,
     /// Hard-grain stages run by grainbench before the deck starts (kinds).
     pub prelude: Vec<String>,
+    /// Hard-grain stages between DEM stages (no external code can run them: refused).
+    pub interlude: Vec<String>,
     pub stages: Vec<Stage>,
 }
 
@@ -254,13 +256,12 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
     let cohesive = scene.law.cohesion().is_some();
     let mut stages = Vec::new();
     let mut pressure: Option<f64> = None;
+    let mut interlude = Vec::new();
     for (_, step) in &stages_all[first_dem..] {
         if !step.is_dem() {
-            return Err(format!(
-                "stage `{}` comes after a DEM stage: external codes have no event-driven \
-                 dynamics, and grainbench prepares hard-grain stages only before the first DEM stage",
-                step.kind()
-            ));
+            // Refused through the matrix (`hard-grain-interlude`).
+            interlude.push(step.kind().to_string());
+            continue;
         }
         let kappa = step.kappa().unwrap_or(scene.law.kappa());
         let dt = time_step_for::<D>(scene, &grains, kappa)?;
@@ -323,6 +324,7 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
         mass,
         diameter: grains.diameter.clone(),
         prelude,
+        interlude,
         stages,
     })
 }
