@@ -46,7 +46,7 @@ pub fn compare(a: &Args) -> Result<i32> {
     if a.np == Some(0) {
         bail!("--np must be at least 1");
     }
-    if !(a.time_limit > 0.0) {
+    if a.time_limit.is_nan() || a.time_limit <= 0.0 {
         bail!("--time-limit must be a positive number of seconds");
     }
     let out = a

@@ -79,3 +79,17 @@ fn committed_decks_match_the_generators() {
     );
     assert!(written > 0);
 }
+
+/// docs/capabilities.md is the output of `grainbench capabilities` (regenerate it with
+/// `cargo run --release -- capabilities > docs/capabilities.md`).
+#[test]
+fn capability_doc_matches_the_matrix() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/capabilities.md");
+    let doc = std::fs::read_to_string(&path).unwrap();
+    assert_eq!(
+        doc,
+        grainbench_comparisons::decks::capability::markdown(),
+        "{} is stale: run `cargo run --release -- capabilities > docs/capabilities.md`",
+        path.display()
+    );
+}

@@ -101,6 +101,7 @@ fn setup() -> Setup {
         mass: grains.iter().map(|g| g.2).collect(),
         inertia: grains.iter().map(|g| 0.1 * g.2).collect(),
         prelude: Vec::new(),
+        interlude: Vec::new(),
         stages: vec![Stage {
             kind: StageKind::FixedVolume { full_time: true },
             max_strain_rate: 0.0,

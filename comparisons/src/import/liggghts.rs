@@ -189,6 +189,7 @@ mod tests {
             mu: Some(0.5),
             force_unit: "P_ref a^2".into(),
             n: 2,
+            data: Default::default(),
         }
     }
 

@@ -229,6 +229,7 @@ mod tests {
             mu: Some(0.3),
             force_unit: "P_ref a^2".into(),
             n: 2,
+            data: Default::default(),
         }
     }
 
