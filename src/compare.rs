@@ -467,3 +467,30 @@ pub fn golden_update(
     }
     Ok(0)
 }
+
+/// `grainbench golden show SCENE`: the recorded values of every code, as the compare table.
+pub fn golden_show(scene: &str, all_metrics: bool) -> Result<i32> {
+    let scene = crate::load_scene(scene)?;
+    let codes: Vec<CodeResult> = Code::ALL
+        .iter()
+        .filter_map(|c| crosscode::recorded(Path::new("."), &scene.name, c.name()))
+        .collect();
+    if codes.is_empty() {
+        bail!(
+            "no golden/{}/<code>.json recorded; run `grainbench compare {0}` and `grainbench golden update {0}`",
+            scene.name
+        );
+    }
+    let cmp = crosscode::build(
+        &scene.name,
+        scene.particles.count,
+        Some(scene.paper_state.as_deref().unwrap_or(&scene.name)),
+        codes,
+        &Bands::embedded(),
+    );
+    print!("{}", cmp.to_markdown(all_metrics));
+    for c in &cmp.codes {
+        println!("{}: `{}`", c.code, c.message.as_deref().unwrap_or(""));
+    }
+    Ok(0)
+}

@@ -176,6 +176,13 @@ enum GoldenAction {
         #[arg(long)]
         from: Option<PathBuf>,
     },
+    /// Print the recorded golden values of a scene as the cross-code table (no runs).
+    Show {
+        scene: String,
+        /// Every metric, not only the main ones.
+        #[arg(long)]
+        all_metrics: bool,
+    },
 }
 
 fn main() {
@@ -226,6 +233,9 @@ fn dispatch(cli: Cli) -> Result<i32> {
         Command::Golden {
             action: GoldenAction::Update { scene, codes, from },
         } => compare::golden_update(&scene, &codes, from, None),
+        Command::Golden {
+            action: GoldenAction::Show { scene, all_metrics },
+        } => compare::golden_show(&scene, all_metrics),
         Command::Run {
             scene,
             out,
