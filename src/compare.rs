@@ -471,11 +471,33 @@ pub fn golden_update(
 /// `grainbench golden show SCENE`: the recorded values of every code, as the compare table.
 pub fn golden_show(scene: &str, all_metrics: bool) -> Result<i32> {
     let scene = crate::load_scene(scene)?;
-    let codes: Vec<CodeResult> = Code::ALL
-        .iter()
-        .filter_map(|c| crosscode::recorded(Path::new("."), &scene.name, c.name()))
-        .collect();
-    if codes.is_empty() {
+    let start = Start::of(&scene).ok();
+    let mut codes = Vec::new();
+    for c in Code::ALL {
+        if let Some(r) = crosscode::recorded(Path::new("."), &scene.name, c.name()) {
+            codes.push(r);
+            continue;
+        }
+        // Not recorded: say why when the code cannot express the scene.
+        if let (Some(st), true) = (&start, c != Code::Rust) {
+            if let Err(refusal) = decks::deck(st, c) {
+                codes.push(CodeResult {
+                    code: c.name().into(),
+                    outcome: "refused".into(),
+                    status: None,
+                    version: None,
+                    wall_seconds: None,
+                    message: Some(refusal.to_string()),
+                    deviations: Vec::new(),
+                    metrics: BTreeMap::new(),
+                    golden: BTreeMap::new(),
+                    pressure_target: None,
+                    pressure_tolerance: None,
+                });
+            }
+        }
+    }
+    if codes.iter().all(|c| c.outcome != "recorded") {
         bail!(
             "no golden/{}/<code>.json recorded; run `grainbench compare {0}` and `grainbench golden update {0}`",
             scene.name
@@ -489,7 +511,7 @@ pub fn golden_show(scene: &str, all_metrics: bool) -> Result<i32> {
         &Bands::embedded(),
     );
     print!("{}", cmp.to_markdown(all_metrics));
-    for c in &cmp.codes {
+    for c in cmp.codes.iter().filter(|c| c.outcome == "recorded") {
         println!("{}: `{}`", c.code, c.message.as_deref().unwrap_or(""));
     }
     Ok(0)

@@ -1,0 +1,108 @@
+//! `grainbench compare` and `golden` paths that need no external code: a missing binary is
+//! reported with its install command while the other codes still run; a scene a code cannot
+//! express is refused with what is missing; `golden update` writes nothing without a compare
+//! run to record.
+
+use assert_cmd::Command;
+use std::path::Path;
+
+/// A 32-sphere version of xcode-smoke (seconds to run).
+fn tiny_scene(dir: &Path) -> std::path::PathBuf {
+    let text = grainbench_engine::library::scene_text("xcode-smoke")
+        .unwrap()
+        .replace("name = \"xcode-smoke\"", "name = \"tiny\"")
+        .replace("count = 256", "count = 32")
+        .replace("max_time = 3000.0", "max_time = 20.0");
+    let path = dir.join("tiny.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn missing_binary_is_reported_and_the_others_still_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path());
+    let out = dir.path().join("cmp");
+    let assert = Command::cargo_bin("grainbench")
+        .unwrap()
+        .env("PATH", dir.path()) // no lmp, liggghts or yade here
+        .args(["compare"])
+        .arg(&scene)
+        .args(["--codes", "rust,lammps,yade", "-q", "-j", "1", "-o"])
+        .arg(&out)
+        .assert();
+    let output = assert.get_output();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("apt-get install -y --no-install-recommends lammps"),
+        "{stderr}"
+    );
+    assert!(stdout.contains("| lammps | missing |"), "{stdout}");
+    let cmp: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("compare.json")).unwrap()).unwrap();
+    let outcome = |code: &str| {
+        cmp["codes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["code"] == code)
+            .unwrap()["outcome"]
+            .as_str()
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(outcome("rust"), "ran");
+    assert_eq!(outcome("lammps"), "missing");
+    assert_eq!(outcome("yade"), "missing");
+    assert!(cmp["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|r| r["metric"] == "phi"));
+    for f in ["compare.md", "compare.csv", "pf.svg", "gr.png"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+}
+
+#[test]
+fn unsupported_features_are_refused_with_what_is_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("decks");
+    let assert = Command::cargo_bin("grainbench")
+        .unwrap()
+        .args(["decks", "grc07-cohesive-small", "--codes", "lammps", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr);
+    assert!(stderr.contains("adhesion unsupported"), "{stderr}");
+    let refused = std::fs::read_to_string(out.join("lammps/refused.txt")).unwrap();
+    assert!(refused.contains("lammps cannot run it"), "{refused}");
+    assert!(!out.join("lammps/in.lammps").exists());
+}
+
+#[test]
+fn golden_update_needs_a_compare_run() {
+    let dir = tempfile::tempdir().unwrap();
+    Command::cargo_bin("grainbench")
+        .unwrap()
+        .current_dir(dir.path())
+        .args(["golden", "update", "xcode-smoke"])
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains(
+            "run `grainbench compare xcode-smoke` first",
+        ));
+    assert!(!dir.path().join("golden").exists());
+}
+
+#[test]
+fn unknown_code_is_a_clear_error() {
+    Command::cargo_bin("grainbench")
+        .unwrap()
+        .args(["compare", "xcode-smoke", "--codes", "rust,gromacs"])
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("unknown code `gromacs`"));
+}
