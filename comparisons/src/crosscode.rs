@@ -478,6 +478,7 @@ mod tests {
         assert!(m.failures.is_empty());
         let mut timeout = result("yade", 0.0, 0.0);
         timeout.outcome = "timeout".into();
+        timeout.metrics.clear();
         let t = build(
             "s",
             10,
