@@ -390,8 +390,13 @@ fn version_line(code: Code, stdout: &Path) -> Option<String> {
     };
     text.lines()
         .find(|l| l.contains(key))
-        .map(|l| l.trim().to_string())
+        .map(clean_version)
         .or_else(|| Some(code.binary().to_string()))
+}
+
+/// `Welcome to Yade 2023.02a` → `Yade 2023.02a`.
+fn clean_version(line: &str) -> String {
+    line.trim().trim_start_matches("Welcome to ").to_string()
 }
 
 /// `grainbench golden update SCENE`: records the results of the last `compare` run of the
@@ -437,7 +442,7 @@ pub fn golden_update(
             continue;
         }
         let doc = serde_json::json!({
-            "code": c.version,
+            "code": c.version.as_deref().map(clean_version),
             "scene": scene.name,
             "n": cmp.n,
             "command": command.clone().unwrap_or_else(|| format!("grainbench compare {} --codes {}", scene.name, c.code)),
