@@ -470,6 +470,16 @@ pub fn golden_update(
             path.display()
         );
     }
+    if written > 1 {
+        // The overlaid plots of a run that recorded several codes at once.
+        for plot in ["pf.svg", "gr.svg"] {
+            if let Ok(bytes) = std::fs::read(dir.join(plot)) {
+                let to = Path::new("golden").join(&scene.name).join(plot);
+                write_atomic(&to, &bytes)?;
+                println!("wrote {}", to.display());
+            }
+        }
+    }
     Ok(0)
 }
 
