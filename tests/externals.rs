@@ -24,7 +24,7 @@ fn smoke_scene_agrees_across_codes() {
             "--codes",
             "rust,lammps,liggghts,yade",
         ])
-        .args(["-j", "1", "-q", "--time-limit", "900", "-o"])
+        .args(["-j", "1", "-q", "--time-limit", "1800", "-o"])
         .arg(&out)
         .assert();
     let output = assert.get_output();
