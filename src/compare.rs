@@ -28,14 +28,6 @@ pub struct Args {
     pub all_metrics: bool,
 }
 
-/// Finds `name` on PATH.
-pub fn which(name: &str) -> Option<PathBuf> {
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path)
-        .map(|d| d.join(name))
-        .find(|p| p.is_file())
-}
-
 pub fn compare(a: &Args) -> Result<i32> {
     let scene = crate::load_scene(&a.scene)?;
     let codes = if a.codes.is_empty() {
@@ -234,7 +226,7 @@ fn run_external(
     a: &Args,
     r: &mut CodeResult,
 ) -> Result<Option<Snapshot>> {
-    let Some(binary) = which(code.binary()) else {
+    let Some(binary) = code.find() else {
         r.outcome = "missing".into();
         r.message = Some(format!(
             "`{}` not found on PATH; install with `{}` (or `bash ci/install-externals.sh`)",
@@ -259,7 +251,7 @@ fn run_external(
     crate::xcode::write_decks(start, &[code], dir.parent().unwrap_or(Path::new(".")), true)?;
     let mut cmd = match (a.np, code) {
         (Some(k), Code::Lammps | Code::Liggghts) => {
-            let Some(mpirun) = which("mpirun") else {
+            let Some(mpirun) = decks::which("mpirun") else {
                 bail!("--np needs `mpirun` (Debian: apt-get install -y --no-install-recommends openmpi-bin)");
             };
             let mut c = Command::new(mpirun);

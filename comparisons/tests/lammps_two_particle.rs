@@ -2,6 +2,8 @@
 //! by `import::lammps`, compared with our Hertz–Mindlin law (normal force, damping force,
 //! tangential stiffness). Skipped when `lmp` is missing (fails when `CI` is set).
 
+mod common;
+
 use grainbench_comparisons::decks::{self, Code, Stage, StageKind, Start, Tolerances};
 use grainbench_comparisons::import::{self, last_dump_frame, Meta};
 use grainbench_engine::contact::hertz_mindlin::HertzMindlin;
@@ -13,21 +15,6 @@ const KAPPA: f64 = 1e4;
 const ZETA: f64 = 0.98;
 const NU: f64 = 0.3;
 const MU: f64 = 0.3;
-
-fn lmp_present() -> bool {
-    let ok = Command::new("lmp")
-        .arg("-h")
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        if std::env::var_os("CI").is_some() {
-            panic!("lmp is not installed (CI is set): apt-get install lammps");
-        }
-        eprintln!("skipping: lmp not found on PATH");
-    }
-    ok
-}
 
 fn scene() -> Scene {
     let text = format!(
@@ -148,7 +135,7 @@ fn rel(a: f64, b: f64) -> f64 {
 
 #[test]
 fn lammps_two_particle_hertz_mindlin() {
-    if !lmp_present() {
+    if !common::present(Code::Lammps) {
         return;
     }
     let law = law();
@@ -283,7 +270,7 @@ fn lammps_write_deck() {
 /// 2D linear law (GRC07): two disks, K_N h + 2ζ√(m* K_N)·v normal force, K_T·u·t tangential.
 #[test]
 fn lammps_two_particle_linear_disks() {
-    if !lmp_present() {
+    if !common::present(Code::Lammps) {
         return;
     }
     let (kn, zeta, mu) = (1e4, 0.8, 0.5);

@@ -7,6 +7,8 @@
 //! force can be recomputed from the dumped state; the tangential displacement is u·t with t
 //! short against the contact period ((ωt)² ≈ 1e-5).
 
+mod common;
+
 use grainbench_comparisons::decks::{self, liggghts, Code, Stage, StageKind, Start, Tolerances};
 use grainbench_comparisons::import::{self, Meta};
 use grainbench_engine::scene::{Mu, Scene};
@@ -15,23 +17,6 @@ use std::process::Command;
 
 const KAPPA: f64 = 1e4;
 const POISSON: f64 = 0.3;
-
-fn liggghts_present() -> bool {
-    // Looked up on PATH (running `liggghts -h` would leave a log file in the cwd).
-    let ok = std::env::var_os("PATH").is_some_and(|p| {
-        std::env::split_paths(&p).any(|d| d.join(Code::Liggghts.binary()).is_file())
-    });
-    if !ok {
-        if std::env::var_os("CI").is_some() {
-            panic!(
-                "liggghts is not installed (CI is set): {}",
-                Code::Liggghts.install_hint()
-            );
-        }
-        eprintln!("skipping: liggghts not found on PATH");
-    }
-    ok
-}
 
 fn scene(zeta: f64) -> Scene {
     let text = format!(
@@ -165,7 +150,7 @@ fn rel(a: f64, b: f64) -> f64 {
 
 #[test]
 fn normal_elastic_force() {
-    if !liggghts_present() {
+    if !common::present(Code::Liggghts) {
         return;
     }
     // ζ = 0: e = 1, no damping; approaching spheres, so h and v both matter.
@@ -194,7 +179,7 @@ fn normal_elastic_force() {
 
 #[test]
 fn normal_damping_at_clamped_zeta() {
-    if !liggghts_present() {
+    if !common::present(Code::Liggghts) {
         return;
     }
     // ζ = 0.98 is clamped: e = 0.0501, effective ζ ≈ 0.63.
@@ -218,7 +203,7 @@ fn normal_damping_at_clamped_zeta() {
 
 #[test]
 fn tangential_stiffness_and_damping() {
-    if !liggghts_present() {
+    if !common::present(Code::Liggghts) {
         return;
     }
     let (steps, dt, u) = (5u64, 1e-5, 0.2);

@@ -10,6 +10,8 @@
 //!
 //! Skipped (with a notice) when `yade` is not on PATH, unless `CI` is set.
 
+mod common;
+
 use grainbench_comparisons::decks::{self, Code, Stage, StageKind, Start, Tolerances};
 use grainbench_comparisons::import::{self, Meta};
 use grainbench_engine::scene::{Mu, Scene};
@@ -27,14 +29,6 @@ const HEAVY: f64 = 1e12;
 /// separating normal velocity of the sliding geometry (v_t δ/d) gives a small viscous force
 /// (YADE clips the total normal force at 0 and then zeroes T).
 const SLIDER: f64 = 1e6;
-
-fn yade_available() -> bool {
-    Command::new("yade")
-        .arg("--version")
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false)
-}
 
 fn scene() -> Scene {
     let toml = format!(
@@ -157,7 +151,7 @@ fn restitution(v0: f64, gap0: f64, dt: f64, clip: bool) -> f64 {
 
 #[test]
 fn yade_two_particle() {
-    if !yade_available() {
+    if !common::present(Code::Yade) {
         if std::env::var_os("CI").is_some() {
             panic!(
                 "yade not found on PATH (CI is set): {}",

@@ -55,6 +55,10 @@ impl Code {
             Code::Yade => "yade",
         }
     }
+    /// The executable on `PATH`, if installed.
+    pub fn find(self) -> Option<std::path::PathBuf> {
+        which(self.binary())
+    }
     /// How to install it on Debian (`ci/install-externals.sh` does all three).
     pub fn install_hint(self) -> &'static str {
         match self {
@@ -70,6 +74,14 @@ impl fmt::Display for Code {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
         f.write_str(self.name())
     }
+}
+
+/// Finds an executable `name` on `PATH`.
+pub fn which(name: &str) -> Option<std::path::PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join(name))
+        .find(|p| p.is_file())
 }
 
 /// What a DEM stage asks of an external code, in absolute reduced units.

@@ -1,0 +1,20 @@
+//! Shared by the two-particle deck tests.
+
+use grainbench_comparisons::decks::Code;
+
+/// Is `code` installed? Missing: a skip notice, or a failure when `CI` is set (CI installs
+/// all three with ci/install-externals.sh).
+pub fn present(code: Code) -> bool {
+    if code.find().is_some() {
+        return true;
+    }
+    if std::env::var_os("CI").is_some() {
+        panic!(
+            "{} is not installed (CI is set): {}",
+            code.binary(),
+            code.install_hint()
+        );
+    }
+    eprintln!("skipping: {} not found on PATH", code.binary());
+    false
+}
