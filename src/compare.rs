@@ -361,11 +361,22 @@ fn last_line(path: &Path) -> String {
         return String::new();
     };
     let tail = &bytes[bytes.len().saturating_sub(4096)..];
-    String::from_utf8_lossy(tail)
-        .lines()
+    let text = String::from_utf8_lossy(tail);
+    // Prefer a progress line (a thermo row starting with the step, or YADE's `stage …`) over
+    // the run summaries LAMMPS and LIGGGHTS print between chunks.
+    let progress = |l: &&&str| {
+        let first = l.split_whitespace().next().unwrap_or("");
+        first.parse::<u64>().is_ok() || first == "stage"
+    };
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    lines
+        .iter()
         .rev()
-        .find(|l| !l.trim().is_empty())
+        .find(progress)
+        .or(lines.last())
+        .copied()
         .unwrap_or("")
+        .trim()
         .chars()
         .take(120)
         .collect()
