@@ -397,6 +397,14 @@ fn version_line(code: Code, stdout: &Path) -> Option<String> {
         .or_else(|| Some(code.binary().to_string()))
 }
 
+/// Was `path` written by `reproduce --record` (several seeds and a paper table)?
+fn recorded_by_reproduce(path: &Path) -> bool {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|d| d.get("table").is_some())
+}
+
 /// `Welcome to Yade 2023.02a` → `Yade 2023.02a`.
 fn clean_version(line: &str) -> String {
     line.trim().trim_start_matches("Welcome to ").to_string()
@@ -444,6 +452,17 @@ pub fn golden_update(
             eprintln!("{}: not recorded ({})", c.code, c.outcome);
             continue;
         }
+        let out = Path::new("golden")
+            .join(&scene.name)
+            .join(format!("{}.json", c.code));
+        if recorded_by_reproduce(&out) {
+            eprintln!(
+                "{}: not recorded: {} holds a `grainbench reproduce --record` result over seeds; rerun that command to change it",
+                c.code,
+                out.display()
+            );
+            continue;
+        }
         let doc = serde_json::json!({
             "code": c.version.as_deref().map(clean_version),
             "scene": scene.name,
@@ -457,9 +476,6 @@ pub fn golden_update(
                 "metrics": c.metrics,
             }],
         });
-        let out = Path::new("golden")
-            .join(&scene.name)
-            .join(format!("{}.json", c.code));
         write_atomic(
             &out,
             (serde_json::to_string_pretty(&doc)? + "\n").as_bytes(),
