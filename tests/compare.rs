@@ -106,3 +106,48 @@ fn unknown_code_is_a_clear_error() {
         .code(2)
         .stderr(predicates::str::contains("unknown code `gromacs`"));
 }
+
+/// `analyze --from CODE DIR` on the final dumps each code wrote for the recorded xcode-smoke
+/// comparison (tests/fixtures/xcode-smoke/<code>/, copied from that run): the readers give
+/// back the recorded golden values, and the snapshot they write reads as one.
+#[test]
+fn external_dumps_analyze_to_their_golden_values() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for code in ["lammps", "liggghts", "yade"] {
+        let dir = root.join("tests/fixtures/xcode-smoke").join(code);
+        let tmp = tempfile::tempdir().unwrap();
+        let snap = tmp.path().join("s.json");
+        let out = Command::cargo_bin("grainbench")
+            .unwrap()
+            .args(["analyze", "--json", "--from", code])
+            .arg(&dir)
+            .arg("--write")
+            .arg(&snap)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{code}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let a: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let golden: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(root.join("golden/xcode-smoke").join(format!("{code}.json"))).unwrap(),
+        )
+        .unwrap();
+        let g = &golden["seeds"][0]["metrics"];
+        for (ours, key) in [
+            ("packing_fraction", "phi"),
+            ("z_backbone", "z_star"),
+            ("z", "z"),
+        ] {
+            let (v, w) = (a[ours].as_f64().unwrap(), g[key].as_f64().unwrap());
+            assert!(
+                (v - w).abs() <= 1e-12 * w.abs(),
+                "{code}: {key} {v} vs golden {w}"
+            );
+        }
+        assert_eq!(a["status"], "equilibrium", "{code}");
+        grainbench_engine::Snapshot::read(&snap).unwrap();
+    }
+}
