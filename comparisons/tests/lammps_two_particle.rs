@@ -3,6 +3,7 @@
 //! tangential stiffness). Skipped when `lmp` is missing (fails when `CI` is set).
 
 mod common;
+use common::rel;
 
 use grainbench_comparisons::decks::{self, Code, Stage, StageKind, Start, Tolerances};
 use grainbench_comparisons::import::{self, last_dump_frame, Meta};
@@ -127,10 +128,6 @@ fn run_h(start: &Start) -> (f64, Vec<f64>, Vec<f64>, f64) {
 
 fn law() -> HertzMindlin<()> {
     HertzMindlin::new(KAPPA.powf(1.5), NU, ZETA, ())
-}
-
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs()
 }
 
 #[test]

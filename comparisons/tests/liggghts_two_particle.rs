@@ -8,6 +8,7 @@
 //! short against the contact period ((ωt)² ≈ 1e-5).
 
 mod common;
+use common::rel;
 
 use grainbench_comparisons::decks::{self, liggghts, Code, Stage, StageKind, Start, Tolerances};
 use grainbench_comparisons::import::{self, Meta};
@@ -142,10 +143,6 @@ fn expected(snap: &grainbench_engine::snapshot::Snapshot, zeta: f64, slip: [f64;
         normal_elastic: ne,
         tangential: t,
     }
-}
-
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs()
 }
 
 #[test]

@@ -18,3 +18,9 @@ pub fn present(code: Code) -> bool {
     eprintln!("skipping: {} not found on PATH", code.binary());
     false
 }
+
+/// Relative difference |a − b|/|b|.
+#[allow(dead_code)] // not every test file uses it
+pub fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
