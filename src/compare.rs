@@ -9,7 +9,6 @@ use grainbench_comparisons::crosscode::{self, Bands, CodeResult, Comparison};
 use grainbench_comparisons::decks::{self, Code, StageKind, Start};
 use grainbench_comparisons::import::{self, Meta};
 use grainbench_comparisons::metrics::Analysis;
-use grainbench_comparisons::plots;
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::collections::BTreeMap;
@@ -66,7 +65,7 @@ pub fn compare(a: &Args) -> Result<i32> {
         out.display()
     );
     let mut results = Vec::new();
-    let mut snaps: Vec<(String, Snapshot)> = Vec::new();
+    let mut analyses: Vec<(String, Analysis)> = Vec::new();
     for &code in &codes {
         if STOP.load(Ordering::SeqCst) {
             break;
@@ -93,7 +92,7 @@ pub fn compare(a: &Args) -> Result<i32> {
             let analysis = crate::analysis_of(&snap);
             r.metrics = analysis.metric_values().into_iter().collect();
             r.status = Some(snap.status.clone());
-            snaps.push((code.name().to_string(), snap));
+            analyses.push((code.name().to_string(), analysis));
         }
         eprintln!(
             "{:<9} {}{}",
@@ -114,14 +113,14 @@ pub fn compare(a: &Args) -> Result<i32> {
         results,
         &Bands::embedded(),
     );
-    write_outputs(&out, &cmp, &snaps, a.all_metrics)?;
+    write_outputs(&out, &cmp, analyses, a.all_metrics)?;
     Ok(if cmp.failures.is_empty() { 0 } else { 1 })
 }
 
 fn write_outputs(
     out: &Path,
     cmp: &Comparison,
-    snaps: &[(String, Snapshot)],
+    analyses: Vec<(String, Analysis)>,
     all: bool,
 ) -> Result<()> {
     let md = cmp.to_markdown(all);
@@ -132,45 +131,9 @@ fn write_outputs(
         &out.join("compare.json"),
         (serde_json::to_string_pretty(cmp)? + "\n").as_bytes(),
     )?;
-    let analyses: Vec<(String, Analysis)> = snaps
-        .iter()
-        .map(|(c, s)| (c.clone(), crate::analysis_of(s)))
-        .collect();
-    let pf: Vec<(String, Vec<(f64, f64)>)> = analyses
-        .iter()
-        .map(|(c, a)| {
-            (
-                c.clone(),
-                crate::reproduce::points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y))),
-            )
-        })
-        .filter(|(_, p)| !p.is_empty())
-        .collect();
-    let gr: Vec<(String, Vec<(f64, f64)>)> = analyses
-        .iter()
-        .map(|(c, a)| {
-            (
-                c.clone(),
-                crate::reproduce::points(
-                    a.structure.pair_correlation.as_ref().map(|g| (&g.x, &g.y)),
-                ),
-            )
-        })
-        .filter(|(_, p)| !p.is_empty())
-        .collect();
-    let frictionless = analyses
-        .first()
-        .is_some_and(|(_, a)| a.dimension == 3 && a.mu == Some(0.0));
-    if !pf.is_empty() {
-        if let Err(e) = plots::force_distribution(&out.join("pf"), &series(&pf), frictionless) {
-            eprintln!("warning: no P(f) plot: {e}");
-        }
-    }
-    if !gr.is_empty() {
-        if let Err(e) = plots::pair_correlation(&out.join("gr"), &series(&gr), Some(8.0)) {
-            eprintln!("warning: no g(r) plot: {e}");
-        }
-    }
+    let labels: Vec<String> = analyses.iter().map(|(c, _)| c.clone()).collect();
+    let analyses: Vec<Analysis> = analyses.into_iter().map(|(_, a)| a).collect();
+    crate::reproduce::write_plots(out, &labels, &analyses);
     eprintln!(
         "wrote {0}/compare.md, compare.csv, compare.json, pf.svg/png, gr.svg/png{1}",
         out.display(),
@@ -181,10 +144,6 @@ fn write_outputs(
         }
     );
     Ok(())
-}
-
-fn series(v: &[(String, Vec<(f64, f64)>)]) -> Vec<plots::Series<'_>> {
-    v.iter().map(|(l, p)| plots::Series::new(l, p)).collect()
 }
 
 /// Our engine, in this process.

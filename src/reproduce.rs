@@ -147,7 +147,8 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     snapshot::write_atomic(&out.join("report.md"), table.to_markdown().as_bytes())?;
     snapshot::write_atomic(&out.join("report.csv"), table.to_csv().as_bytes())?;
     snapshot::write_atomic(&out.join("report.json"), table.to_json().as_bytes())?;
-    let plotted = write_plots(&out, &runs, &analyses);
+    let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
+    let plotted = write_plots(&out, &labels, &analyses);
     let not_equilibrated: Vec<u64> = runs
         .iter()
         .filter(|r| r.status != "equilibrium")
@@ -206,10 +207,10 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
     }))
 }
 
-/// P(f) and g(r) of every seed; the DTS fit for frictionless sphere packings (AR07 Fig. 4).
-fn write_plots(out: &Path, runs: &[SeedRun], analyses: &[Analysis]) -> Vec<PathBuf> {
+/// P(f) and g(r) of every analysis (one curve per label: seeds, codes), overlaid; the DTS fit
+/// for frictionless sphere packings (AR07 Fig. 4). Returns the files written.
+pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) -> Vec<PathBuf> {
     let mut written = Vec::new();
-    let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
     let pf: Vec<Vec<(f64, f64)>> = analyses
         .iter()
         .map(|a| points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y))))
@@ -228,11 +229,11 @@ fn write_plots(out: &Path, runs: &[SeedRun], analyses: &[Analysis]) -> Vec<PathB
             .map(|(p, l)| plots::Series::new(l, p))
             .collect()
     }
-    match plots::force_distribution(&out.join("pf"), &series(&pf, &labels), frictionless_spheres) {
+    match plots::force_distribution(&out.join("pf"), &series(&pf, labels), frictionless_spheres) {
         Ok(f) => written.extend([f.svg, f.png]),
         Err(e) => eprintln!("warning: no P(f) plot: {e}"),
     }
-    match plots::pair_correlation(&out.join("gr"), &series(&gr, &labels), Some(8.0)) {
+    match plots::pair_correlation(&out.join("gr"), &series(&gr, labels), Some(8.0)) {
         Ok(f) => written.extend([f.svg, f.png]),
         Err(e) => eprintln!("warning: no g(r) plot: {e}"),
     }
@@ -276,7 +277,7 @@ fn record(
     Ok(path)
 }
 
-pub(crate) fn points(xy: Option<(&Vec<f64>, &Vec<f64>)>) -> Vec<(f64, f64)> {
+fn points(xy: Option<(&Vec<f64>, &Vec<f64>)>) -> Vec<(f64, f64)> {
     xy.map(|(x, y)| x.iter().copied().zip(y.iter().copied()).collect())
         .unwrap_or_default()
 }

@@ -11,63 +11,16 @@
 //!   the tangential force on atom 1;
 //! * `final.status`: one word (`equilibrium`, `time-limit`), optional.
 
-use super::{last_dump_frame, read_status, ImportError, Meta, Raw, RawContact};
-use std::collections::HashMap;
+use super::{
+    last_dump_frame, read_atoms, read_status, unit_normal, ImportError, Meta, Raw, RawContact,
+};
 use std::path::Path;
 
 /// Reads the final files of a LAMMPS run in `dir`.
 pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
     let d = meta.dimension;
-    let apath = dir.join("final.atoms");
-    let atoms = last_dump_frame(&apath)?;
-    if atoms.bounds.len() < d {
-        return Err(ImportError::new(&apath, "no box bounds in the last frame"));
-    }
-    let col = |name: &str| atoms.col(&apath, name);
-    let opt = |name: &str| atoms.columns.iter().position(|c| c == name);
-    let (cid, cr, cm) = (col("id")?, col("radius")?, col("mass")?);
-    let cx = [col("x")?, col("y")?, col("z")?];
-    let cv = [opt("vx"), opt("vy"), opt("vz")];
-    let cw = [opt("omegax"), opt("omegay"), opt("omegaz")];
-    let mut rows: Vec<&Vec<f64>> = atoms.rows.iter().collect();
-    rows.sort_by(|a, b| a[cid].total_cmp(&b[cid]));
-    let index: HashMap<i64, usize> = rows
-        .iter()
-        .enumerate()
-        .map(|(k, r)| (r[cid] as i64, k))
-        .collect();
-    if index.len() != rows.len() {
-        return Err(ImportError::new(&apath, "repeated atom ids"));
-    }
-    let pick = |r: &Vec<f64>, c: &[Option<usize>; 3]| -> Vec<f64> {
-        c.iter().map(|k| k.map_or(0.0, |k| r[k])).collect()
-    };
-    let mut raw = Raw {
-        lengths: atoms.bounds.iter().map(|(lo, hi)| hi - lo).collect(),
-        origin: atoms.bounds.iter().map(|(lo, _)| *lo).collect(),
-        position: rows
-            .iter()
-            .map(|r| cx.iter().map(|&k| r[k]).collect())
-            .collect(),
-        velocity: rows.iter().map(|r| pick(r, &cv)[..d].to_vec()).collect(),
-        angular_velocity: rows
-            .iter()
-            .map(|r| {
-                let w = pick(r, &cw);
-                if d == 2 {
-                    vec![w[2]]
-                } else {
-                    w
-                }
-            })
-            .collect(),
-        radius: rows.iter().map(|r| r[cr]).collect(),
-        mass: rows.iter().map(|r| r[cm]).collect(),
-        contacts: Vec::new(),
-        time: dump_time(&apath)?.unwrap_or(0.0),
-        step: atoms.timestep,
-        status: read_status(&dir.join("final.status")),
-    };
+    let (mut raw, index) = read_atoms(&dir.join("final.atoms"), meta)?;
+    raw.status = read_status(&dir.join("final.status"));
     let cpath = dir.join("final.contacts");
     let pairs = last_dump_frame(&cpath)?;
     if pairs.columns.len() < 9 {
@@ -79,10 +32,9 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
             ),
         ));
     }
-    let l = &raw.lengths;
     for r in &pairs.rows {
         let atom = |k: usize| {
-            index.get(&(r[k] as i64)).copied().ok_or_else(|| {
+            index.get(&(r[k].round() as i64)).copied().ok_or_else(|| {
                 ImportError::new(
                     &cpath,
                     format!("contact names atom {} not in final.atoms", r[k]),
@@ -90,18 +42,8 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
             })
         };
         let (i, j) = (atom(0)?, atom(1)?);
-        // Unit vector i → j by the nearest image.
-        let mut n: Vec<f64> = (0..d)
-            .map(|a| {
-                let x = raw.position[j][a] - raw.position[i][a];
-                x - l[a] * (x / l[a]).round()
-            })
-            .collect();
-        let len = n.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if len == 0.0 {
-            return Err(ImportError::new(&cpath, format!("atoms {i}, {j} coincide")));
-        }
-        n.iter_mut().for_each(|x| *x /= len);
+        let n = unit_normal(&raw, i, j, d)
+            .ok_or_else(|| ImportError::new(&cpath, format!("atoms {i}, {j} coincide")))?;
         // fx fy fz: normal force on i, along x_i − x_j when repulsive.
         let normal = -(0..d).map(|a| r[3 + a] * n[a]).sum::<f64>();
         // p1 p2 p3: tangential force on i; on j it is the opposite.
@@ -120,20 +62,4 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
         });
     }
     Ok(raw)
-}
-
-/// The value after the last `ITEM: TIME` of a dump (`dump_modify time yes`), if any.
-fn dump_time(path: &Path) -> Result<Option<f64>, ImportError> {
-    let text = std::fs::read_to_string(path).map_err(|e| ImportError::new(path, e))?;
-    let Some(k) = text.rfind("ITEM: TIME\n") else {
-        return Ok(None);
-    };
-    let v = text[k + "ITEM: TIME\n".len()..]
-        .lines()
-        .next()
-        .unwrap_or("")
-        .trim();
-    v.parse()
-        .map(Some)
-        .map_err(|e| ImportError::new(path, format!("time {v:?}: {e}")))
 }

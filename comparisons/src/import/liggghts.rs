@@ -10,18 +10,19 @@
 //!
 //! The last frame of each dump is read; ids become 0-based indices in id order.
 
-use super::{last_dump_frame, read_status, DumpSection, ImportError, Meta, Raw, RawContact};
+use super::{
+    last_dump_frame, read_atoms, read_status, unit_normal, DumpSection, ImportError, Meta, Raw,
+    RawContact,
+};
 use std::collections::HashMap;
 use std::path::Path;
 
 /// Reads the final files of a LIGGGHTS run in `dir`.
 pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
-    let apath = dir.join("final.atoms");
-    let atoms = last_dump_frame(&apath)?;
-    let mut raw = read_atoms(&apath, &atoms, meta)?;
+    let (mut raw, ids) = read_atoms(&dir.join("final.atoms"), meta)?;
     let cpath = dir.join("final.contacts");
     let contacts = last_dump_frame(&cpath)?;
-    raw.contacts = read_contacts(&cpath, &contacts, &raw, meta)?;
+    raw.contacts = read_contacts(&cpath, &contacts, &raw, &ids, meta)?;
     raw.status = read_status(&dir.join("final.status"));
     if let Ok(t) = std::fs::read_to_string(dir.join("final.time")) {
         let v: Vec<f64> = t
@@ -35,79 +36,14 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
     Ok(raw)
 }
 
-fn read_atoms(path: &Path, sec: &DumpSection, meta: &Meta) -> Result<Raw, ImportError> {
-    if sec.bounds.len() < 3 {
-        return Err(ImportError::new(path, "no box bounds in the last frame"));
-    }
-    let id = sec.col(path, "id")?;
-    let rad = sec.col(path, "radius")?;
-    let mass = sec.col(path, "mass")?;
-    let x = [
-        sec.col(path, "x")?,
-        sec.col(path, "y")?,
-        sec.col(path, "z")?,
-    ];
-    let opt = |names: [&str; 3]| -> Option<[usize; 3]> {
-        let c: Vec<usize> = names
-            .iter()
-            .filter_map(|n| sec.columns.iter().position(|c| c == n))
-            .collect();
-        (c.len() == 3).then(|| [c[0], c[1], c[2]])
-    };
-    let v = opt(["vx", "vy", "vz"]);
-    let w = opt(["omegax", "omegay", "omegaz"]);
-    let d = meta.dimension;
-    let mut rows: Vec<&Vec<f64>> = sec.rows.iter().collect();
-    rows.sort_by(|a, b| a[id].total_cmp(&b[id]));
-    if meta.n != 0 && rows.len() != meta.n {
-        return Err(ImportError::new(
-            path,
-            format!("{} atoms, deck.json says {}", rows.len(), meta.n),
-        ));
-    }
-    let mut raw = Raw {
-        lengths: sec.bounds.iter().map(|(lo, hi)| hi - lo).collect(),
-        origin: sec.bounds.iter().map(|(lo, _)| *lo).collect(),
-        step: sec.timestep,
-        ..Raw::default()
-    };
-    for r in rows {
-        raw.position.push(x[..d].iter().map(|&c| r[c]).collect());
-        raw.radius.push(r[rad]);
-        raw.mass.push(r[mass]);
-        raw.velocity
-            .push(v.map_or(vec![0.0; d], |c| c[..d].iter().map(|&k| r[k]).collect()));
-        if let Some(c) = w {
-            // 2D: the spin is about z.
-            raw.angular_velocity.push(if d == 2 {
-                vec![r[c[2]]]
-            } else {
-                c.iter().map(|&k| r[k]).collect()
-            });
-        }
-    }
-    Ok(raw)
-}
-
 fn read_contacts(
     path: &Path,
     sec: &DumpSection,
     raw: &Raw,
+    ids: &HashMap<i64, usize>,
     meta: &Meta,
 ) -> Result<Vec<RawContact>, ImportError> {
     let d = meta.dimension;
-    // Index of grain ids: the atoms dump's ids, sorted, as read.
-    let apath = path.with_file_name("final.atoms");
-    let ids = {
-        let atoms = last_dump_frame(&apath)?;
-        let c = atoms.col(&apath, "id")?;
-        let mut v: Vec<i64> = atoms.rows.iter().map(|r| r[c].round() as i64).collect();
-        v.sort_unstable();
-        v.into_iter()
-            .enumerate()
-            .map(|(k, id)| (id, k))
-            .collect::<HashMap<i64, usize>>()
-    };
     // Columns: id1 id2 flag fx fy fz, after pos (6) when the dump has `pos` (12+ columns with
     // positions written first is recognised by named columns only, see the format doc).
     let named = |n: &str| sec.columns.iter().position(|c| c == n);
@@ -139,22 +75,9 @@ fn read_contacts(
         };
         let (i, j) = (look(ci)?, look(cj)?);
         let f_on_i = [r[cf], r[cf + 1], r[cf + 2]];
-        // Unit vector i → j by the nearest image.
-        let mut n: Vec<f64> = (0..d)
-            .map(|a| {
-                let x = raw.position[j][a] - raw.position[i][a];
-                let l = raw.lengths[a];
-                x - l * (x / l).round()
-            })
-            .collect();
-        let dist = n.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if dist == 0.0 {
-            return Err(ImportError::new(
-                path,
-                format!("contact ({i}, {j}) joins coincident grains"),
-            ));
-        }
-        n.iter_mut().for_each(|x| *x /= dist);
+        let n = unit_normal(raw, i, j, d).ok_or_else(|| {
+            ImportError::new(path, format!("contact ({i}, {j}) joins coincident grains"))
+        })?;
         // Force on j = −(force on i); normal repulsive positive = (force on j)·n.
         let f_on_j: Vec<f64> = (0..d).map(|a| -f_on_i[a]).collect();
         let normal: f64 = (0..d).map(|a| f_on_j[a] * n[a]).sum();

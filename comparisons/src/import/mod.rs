@@ -157,12 +157,7 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
                 c.i, c.j
             ));
         }
-        let mut branch: Vec<f64> = (0..d)
-            .map(|a| {
-                let x = position[c.j][a] - position[c.i][a];
-                x - l[a] * (x / l[a]).round()
-            })
-            .collect();
+        let branch = branch(&position, &l, c.i, c.j, d);
         let dist = branch.iter().map(|x| x * x).sum::<f64>().sqrt();
         if dist == 0.0 {
             return Err(format!(
@@ -179,8 +174,6 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
                 stress[a][b] += force[a] * branch[b] / omega;
             }
         }
-        // Keep the stored branch exact to the positions written.
-        branch.truncate(d);
         contacts.push(snapshot::Contact {
             i: c.i,
             j: c.j,
@@ -248,6 +241,8 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
 /// `ITEM: <name> <columns…>` header: returns (column names, rows, header values before it).
 pub struct DumpSection {
     pub timestep: u64,
+    /// `ITEM: TIME` just before the frame (`dump_modify time yes`), if written.
+    pub time: Option<f64>,
     /// Box bounds (lo, hi) per axis.
     pub bounds: Vec<(f64, f64)>,
     pub columns: Vec<String>,
@@ -262,8 +257,20 @@ pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
         ImportError::new(path, "no `ITEM: TIMESTEP` line: not a LAMMPS-style dump")
     })?;
     let mut lines = text[start..].lines().peekable();
+    // `dump_modify time yes` writes `ITEM: TIME` and its value right before `ITEM: TIMESTEP`.
+    let time = match text[..start].rfind("ITEM: TIME\n") {
+        Some(k) if text[k..start].lines().count() == 2 => {
+            let v = text[k..start].lines().nth(1).unwrap_or("").trim();
+            Some(
+                v.parse()
+                    .map_err(|e| ImportError::new(path, format!("time {v:?}: {e}")))?,
+            )
+        }
+        _ => None,
+    };
     let mut sec = DumpSection {
         timestep: 0,
+        time,
         bounds: Vec::new(),
         columns: Vec::new(),
         rows: Vec::new(),
@@ -343,6 +350,95 @@ impl DumpSection {
             )
         })
     }
+}
+
+/// The atoms of the last frame of a LAMMPS-style `dump custom` (columns `id radius mass x y z`
+/// required, `vx vy vz` and `omegax omegay omegaz` optional), in id order, with the map from
+/// atom id to index. Box, step and (if written) time come from the frame header.
+pub fn read_atoms(
+    path: &Path,
+    meta: &Meta,
+) -> Result<(Raw, std::collections::HashMap<i64, usize>), ImportError> {
+    let d = meta.dimension;
+    let sec = last_dump_frame(path)?;
+    if sec.bounds.len() < d {
+        return Err(ImportError::new(path, "no box bounds in the last frame"));
+    }
+    let (id, rad, mass) = (
+        sec.col(path, "id")?,
+        sec.col(path, "radius")?,
+        sec.col(path, "mass")?,
+    );
+    let x = [
+        sec.col(path, "x")?,
+        sec.col(path, "y")?,
+        sec.col(path, "z")?,
+    ];
+    let opt = |names: [&str; 3]| -> Option<[usize; 3]> {
+        let c: Vec<usize> = names
+            .iter()
+            .filter_map(|n| sec.columns.iter().position(|c| c == n))
+            .collect();
+        (c.len() == 3).then(|| [c[0], c[1], c[2]])
+    };
+    let v = opt(["vx", "vy", "vz"]);
+    let w = opt(["omegax", "omegay", "omegaz"]);
+    let mut rows: Vec<&Vec<f64>> = sec.rows.iter().collect();
+    rows.sort_by(|a, b| a[id].total_cmp(&b[id]));
+    if meta.n != 0 && rows.len() != meta.n {
+        return Err(ImportError::new(
+            path,
+            format!("{} atoms, deck.json says {}", rows.len(), meta.n),
+        ));
+    }
+    let index: std::collections::HashMap<i64, usize> = rows
+        .iter()
+        .enumerate()
+        .map(|(k, r)| (r[id].round() as i64, k))
+        .collect();
+    if index.len() != rows.len() {
+        return Err(ImportError::new(path, "repeated atom ids"));
+    }
+    let mut raw = Raw {
+        lengths: sec.bounds.iter().map(|(lo, hi)| hi - lo).collect(),
+        origin: sec.bounds.iter().map(|(lo, _)| *lo).collect(),
+        step: sec.timestep,
+        time: sec.time.unwrap_or(0.0),
+        ..Raw::default()
+    };
+    for r in rows {
+        raw.position.push(x[..d].iter().map(|&c| r[c]).collect());
+        raw.radius.push(r[rad]);
+        raw.mass.push(r[mass]);
+        raw.velocity
+            .push(v.map_or(vec![0.0; d], |c| c[..d].iter().map(|&k| r[k]).collect()));
+        if let Some(c) = w {
+            // 2D: the spin is about z.
+            raw.angular_velocity.push(if d == 2 {
+                vec![r[c[2]]]
+            } else {
+                c.iter().map(|&k| r[k]).collect()
+            });
+        }
+    }
+    Ok((raw, index))
+}
+
+/// r_j − r_i by the nearest periodic image (first `d` axes).
+pub fn branch(position: &[Vec<f64>], lengths: &[f64], i: usize, j: usize, d: usize) -> Vec<f64> {
+    (0..d)
+        .map(|a| {
+            let x = position[j][a] - position[i][a];
+            x - lengths[a] * (x / lengths[a]).round()
+        })
+        .collect()
+}
+
+/// The unit vector from grain i to grain j by the nearest image; `None` if they coincide.
+pub fn unit_normal(raw: &Raw, i: usize, j: usize, d: usize) -> Option<Vec<f64>> {
+    let b = branch(&raw.position, &raw.lengths, i, j, d);
+    let len = b.iter().map(|x| x * x).sum::<f64>().sqrt();
+    (len > 0.0).then(|| b.iter().map(|x| x / len).collect())
 }
 
 /// Reads a one-word status file a deck writes at its end (`equilibrium`, `time-limit`).
