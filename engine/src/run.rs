@@ -650,6 +650,17 @@ fn force_scale(scene: &Scene) -> f64 {
         .fold(1.0, f64::max)
 }
 
+/// Generalized mass of the cell, AR07 (7): `numerics.cell_mass` × the total grain mass,
+/// divided by the cell's linear size when `cell_mass_per_length` (GRC07 §II.A).
+pub fn cell_mass(numerics: &crate::scene::Numerics, total_mass: f64, volume: f64, d: usize) -> f64 {
+    let m = numerics.cell_mass * total_mass;
+    if numerics.cell_mass_per_length {
+        m / volume.powf(1.0 / d as f64)
+    } else {
+        m
+    }
+}
+
 /// The system of a scene's initial grains for a law (as the first stage of a scene that starts
 /// with a DEM stage sees it).
 pub fn build_system<D: Dim, L: ContactLaw<D>>(
@@ -666,11 +677,7 @@ pub fn system_of<D: Dim, L: ContactLaw<D>>(
     grains: &Grains<D>,
 ) -> Result<System<D, L>, String> {
     let total_mass: f64 = grains.diameter.iter().map(|d| d.powi(D::D as i32)).sum();
-    let mut cell_mass = scene.numerics.cell_mass * total_mass;
-    if scene.numerics.cell_mass_per_length {
-        // GRC07 §II.A: divided by a linear size of the cell.
-        cell_mass /= D::product(grains.l).powf(1.0 / D::D as f64);
-    }
+    let cell_mass = cell_mass(&scene.numerics, total_mass, D::product(grains.l), D::D);
     let cell = Cell::new(grains.l, cell_mass);
     let mut sys = System::new(
         law,

@@ -55,18 +55,11 @@ pub fn tsuji_restitution(c: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-fn mu_text(mu: Mu) -> String {
-    match mu {
-        Mu::Infinite => num(f64::INFINITY),
-        Mu::Finite(x) => num(x),
-    }
-}
-
 /// `pair_coeff * * …` of the scene's law at stiffness parameter `kappa` and friction `mu`.
 fn pair_coeff(law: &Law, kappa: f64, mu: Mu) -> String {
     let tangential = |kt: &str| -> String {
         if mu.value() > 0.0 {
-            format!("tangential {kt} 0.0 {}", mu_text(mu))
+            format!("tangential {kt} 0.0 {}", super::mu_text(mu))
         } else {
             "tangential linear_nohistory 0.0 0.0".into()
         }

@@ -25,7 +25,7 @@
 //!   (`equilibrium` or `time-limit`), `final.time` (elapsed time and step).
 
 use super::{header_lines, num, Code, Deck, StageKind, Start};
-use grainbench_engine::scene::{Law, Mu};
+use grainbench_engine::scene::Law;
 use std::fmt::Write as _;
 
 /// Smallest restitution LIGGGHTS 3.8.0 accepts (it requires 0.05 < e ≤ 1).
@@ -55,13 +55,6 @@ pub fn restitution(zeta: f64) -> (f64, f64) {
 /// P_ref = 1), E = Ẽ(1−ν²).
 fn young(kappa: f64, poisson: f64) -> f64 {
     kappa.powf(1.5) * (1.0 - poisson * poisson)
-}
-
-fn mu_text(mu: Mu) -> String {
-    match mu {
-        Mu::Finite(x) => num(x),
-        Mu::Infinite => "1e300".into(),
-    }
 }
 
 /// The LIGGGHTS deck of `start`.
@@ -113,7 +106,7 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
         num(young(first.kappa, poisson)),
         num(poisson),
         num(e),
-        mu_text(first.mu)
+        super::mu_text(first.mu)
     );
     // Measures (the pair/gran/local compute must exist before the first run).
     let _ = writeln!(
@@ -147,7 +140,7 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
             let _ = writeln!(
                 s,
                 "fix m4 all property/global coefficientFriction peratomtypepair 1 {}",
-                mu_text(st.mu)
+                super::mu_text(st.mu)
             );
             prev_mu = st.mu;
         }

@@ -127,12 +127,12 @@ pub struct Tolerances {
 
 impl Tolerances {
     /// The criteria of a stage at pressure `p` (`None`: fixed cell).
-    pub fn of(c: &Criteria, p: Option<f64>, dimension: usize) -> Tolerances {
+    pub fn of(c: &Criteria, p: Option<f64>) -> Tolerances {
         let f_ref = match c.scale {
             ForceScale::Pressure => p.unwrap_or(1.0),
             ForceScale::Cohesion => p.unwrap_or(0.0).max(1.0),
         };
-        let _ = dimension; // a = 1: F_ref/a^(d-1) = F_ref in reduced units.
+        // a = 1: F_ref/a^(d-1) = F_ref in reduced units.
         Tolerances {
             force: c.force * f_ref,
             moment: c.moment * f_ref,
@@ -309,7 +309,7 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
             mu: scene.mu_of(step),
             kappa,
             dt,
-            tolerances: Tolerances::of(&step.criteria(), pressure, D::D),
+            tolerances: Tolerances::of(&step.criteria(), pressure),
             check_every: scene.numerics.check_every,
         });
     }
@@ -463,6 +463,19 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 /// Is `name` a generated data file (not committed; its checksum is in `deck.json`)?
 pub fn is_data_file(deck: &Deck, name: &str) -> bool {
     deck.files.iter().skip(1).any(|(n, _)| n == name) && name != crate::import::Meta::FILE
+}
+
+/// μ as a number for codes without an infinite friction coefficient: ∞ → 1e300.
+pub fn mu_number(mu: Mu) -> f64 {
+    match mu {
+        Mu::Finite(x) => x,
+        Mu::Infinite => 1e300,
+    }
+}
+
+/// [`mu_number`] as deck text.
+pub fn mu_text(mu: Mu) -> String {
+    num(mu_number(mu))
 }
 
 /// Formats a float so that it reads back to the same value (shortest round-trip form).

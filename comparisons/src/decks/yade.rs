@@ -15,7 +15,7 @@
 //! `docs/external-formats/yade.md`.
 
 use super::{header_lines, num, Code, Deck, StageKind, Start};
-use grainbench_engine::scene::{Law, Mu};
+use grainbench_engine::scene::Law;
 
 /// The python literal of a float.
 fn py(x: f64) -> String {
@@ -30,30 +30,6 @@ fn py(x: f64) -> String {
     } else {
         num(x)
     }
-}
-
-/// Friction coefficient given to YADE: μ = ∞ becomes 1e300 (friction angle π/2 in double,
-/// tan φ ≈ 1.6e16).
-fn mu_value(mu: Mu) -> f64 {
-    match mu {
-        Mu::Finite(x) => x,
-        Mu::Infinite => 1e300,
-    }
-}
-
-/// Generalized cell mass M of AR07 (7) as our engine sets it (`numerics.cell_mass` times the
-/// grain mass, divided by the cell size when `cell_mass_per_length`).
-fn cell_mass(start: &Start) -> f64 {
-    let n = &start.scene.numerics;
-    let mut m = n.cell_mass * start.mass.iter().sum::<f64>();
-    if n.cell_mass_per_length {
-        m /= start
-            .lengths
-            .iter()
-            .product::<f64>()
-            .powf(1.0 / start.dimension as f64);
-    }
-    m
 }
 
 /// The yade deck of `start`.
@@ -85,7 +61,12 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
             .stages
             .first()
             .map_or(start.law().kappa(), |s| s.kappa)),
-        py(cell_mass(start)),
+        py(grainbench_engine::run::cell_mass(
+            &start.scene.numerics,
+            start.mass.iter().sum(),
+            start.lengths.iter().product(),
+            start.dimension,
+        )),
     ));
     s.push_str("# One dict per DEM stage: kind, pressure (compress), strain-rate cap (1/time),\n");
     s.push_str("# time step, step limit, check period, mu, kappa, tolerances (absolute).\n");
@@ -104,7 +85,7 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
             py(st.dt),
             st.max_steps,
             st.check_every,
-            py(mu_value(st.mu)),
+            py(super::mu_number(st.mu)),
             py(st.kappa),
             py(st.tolerances.force),
             py(st.tolerances.moment),
