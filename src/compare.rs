@@ -11,7 +11,6 @@ use grainbench_comparisons::import::{self, Meta};
 use grainbench_comparisons::metrics::Analysis;
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::Ordering;
@@ -72,17 +71,10 @@ pub fn compare(a: &Args) -> Result<i32> {
         }
         let dir = out.join(code.name());
         let mut r = CodeResult {
-            code: code.name().into(),
-            outcome: "ran".into(),
-            status: None,
-            version: None,
-            wall_seconds: None,
-            message: None,
-            deviations: Vec::new(),
-            metrics: BTreeMap::new(),
             golden: crosscode::golden_metrics(Path::new("."), &scene.name, code.name()),
             pressure_target: p_target,
             pressure_tolerance: p_tol,
+            ..CodeResult::new(code.name(), "ran")
         };
         let snap = match code {
             Code::Rust => run_rust(&scene, &dir, a.quiet, &mut r)?,
@@ -475,17 +467,8 @@ pub fn golden_show(scene: &str, all_metrics: bool) -> Result<i32> {
         if let (Some(st), true) = (&start, c != Code::Rust) {
             if let Err(refusal) = decks::deck(st, c) {
                 codes.push(CodeResult {
-                    code: c.name().into(),
-                    outcome: "refused".into(),
-                    status: None,
-                    version: None,
-                    wall_seconds: None,
                     message: Some(refusal.to_string()),
-                    deviations: Vec::new(),
-                    metrics: BTreeMap::new(),
-                    golden: BTreeMap::new(),
-                    pressure_target: None,
-                    pressure_tolerance: None,
+                    ..CodeResult::new(c.name(), "refused")
                 });
             }
         }

@@ -37,6 +37,25 @@ pub struct CodeResult {
     pub pressure_tolerance: Option<f64>,
 }
 
+impl CodeResult {
+    /// A result with only its code and outcome filled in.
+    pub fn new(code: &str, outcome: &str) -> CodeResult {
+        CodeResult {
+            code: code.into(),
+            outcome: outcome.into(),
+            status: None,
+            version: None,
+            wall_seconds: None,
+            message: None,
+            deviations: Vec::new(),
+            metrics: BTreeMap::new(),
+            golden: BTreeMap::new(),
+            pressure_target: None,
+            pressure_tolerance: None,
+        }
+    }
+}
+
 /// Cross-code tolerance of one metric: |code − rust| ≤ k·√2·spread.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -113,18 +132,18 @@ fn embedded_golden(scene: &str, code: &str) -> Option<&'static str> {
     }
 }
 
-/// Reads the mean metrics of `golden/<scene>/<code>.json` (any number of seeds).
-pub fn golden_metrics(root: &Path, scene: &str, code: &str) -> BTreeMap<String, f64> {
+/// The recorded document `golden/<scene>/<code>.json` (the embedded copy for the default
+/// scene when the file is not there).
+fn golden_doc(root: &Path, scene: &str, code: &str) -> Option<serde_json::Value> {
     let path = root.join("golden").join(scene).join(format!("{code}.json"));
-    let Some(text) = std::fs::read_to_string(&path)
+    let text = std::fs::read_to_string(&path)
         .ok()
-        .or_else(|| embedded_golden(scene, code).map(String::from))
-    else {
-        return BTreeMap::new();
-    };
-    let Ok(doc) = serde_json::from_str::<serde_json::Value>(&text) else {
-        return BTreeMap::new();
-    };
+        .or_else(|| embedded_golden(scene, code).map(String::from))?;
+    serde_json::from_str(&text).ok()
+}
+
+/// Mean of each metric over the seeds of a golden document.
+fn mean_metrics(doc: &serde_json::Value) -> BTreeMap<String, f64> {
     let mut sums: BTreeMap<String, (f64, usize)> = BTreeMap::new();
     for seed in doc["seeds"].as_array().into_iter().flatten() {
         if let Some(m) = seed["metrics"].as_object() {
@@ -142,15 +161,19 @@ pub fn golden_metrics(root: &Path, scene: &str, code: &str) -> BTreeMap<String, 
         .collect()
 }
 
+/// The mean metrics of `golden/<scene>/<code>.json` (any number of seeds); empty if none.
+pub fn golden_metrics(root: &Path, scene: &str, code: &str) -> BTreeMap<String, f64> {
+    golden_doc(root, scene, code)
+        .map(|d| mean_metrics(&d))
+        .unwrap_or_default()
+}
+
 /// The recorded result of `code` (`golden/<scene>/<code>.json`) as a table column: mean metrics
 /// over its seeds, status and wall time of its first seed, the code's version.
 pub fn recorded(root: &Path, scene: &str, code: &str) -> Option<CodeResult> {
-    let path = root.join("golden").join(scene).join(format!("{code}.json"));
-    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
+    let doc = golden_doc(root, scene, code)?;
     let first = &doc["seeds"][0];
     Some(CodeResult {
-        code: code.into(),
-        outcome: "recorded".into(),
         status: first["status"].as_str().map(String::from),
         version: doc["code"].as_str().map(String::from),
         wall_seconds: first["wall_seconds"].as_f64(),
@@ -161,10 +184,8 @@ pub fn recorded(root: &Path, scene: &str, code: &str) -> Option<CodeResult> {
             .flatten()
             .filter_map(|d| d.as_str().map(String::from))
             .collect(),
-        metrics: golden_metrics(root, scene, code),
-        golden: BTreeMap::new(),
-        pressure_target: None,
-        pressure_tolerance: None,
+        metrics: mean_metrics(&doc),
+        ..CodeResult::new(code, "recorded")
     })
 }
 
