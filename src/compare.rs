@@ -199,7 +199,7 @@ fn run_external(
     if dir.exists() {
         std::fs::remove_dir_all(dir).with_context(|| format!("clearing {}", dir.display()))?;
     }
-    crate::xcode::write_decks(start, &[code], dir.parent().unwrap_or(Path::new(".")), true)?;
+    crate::xcode::write_deck(&deck, dir)?;
     let mut cmd = match (a.np, code) {
         (Some(k), Code::Lammps | Code::Liggghts) => {
             let Some(mpirun) = decks::which("mpirun") else {

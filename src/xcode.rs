@@ -29,20 +29,25 @@ pub fn parse_codes(list: &[String], allow_rust: bool) -> Result<Vec<Code>> {
     Ok(out)
 }
 
-/// Writes the decks of `start` for `codes` into `root/<code>/`; refusals are reported and
-/// skipped. Returns the written decks.
-pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> Result<Vec<Deck>> {
-    let mut written = Vec::new();
+/// Writes one deck's files into `dir` (removing a refusal left there by an earlier matrix).
+pub fn write_deck(deck: &Deck, dir: &Path) -> Result<()> {
+    let _ = std::fs::remove_file(dir.join(REFUSED));
+    for (name, text) in &deck.files {
+        let path = dir.join(name);
+        write_atomic(&path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Writes the decks of `start` for `codes` into `root/<code>/`; a refusal is written as
+/// `refused.txt` instead.
+pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> Result<()> {
     for &code in codes {
         match decks::deck(start, code) {
             Ok(deck) => {
                 let dir = root.join(code.name());
-                let _ = std::fs::remove_file(dir.join(REFUSED));
-                for (name, text) in &deck.files {
-                    let path = dir.join(name);
-                    write_atomic(&path, text.as_bytes())
-                        .with_context(|| format!("writing {}", path.display()))?;
-                }
+                write_deck(&deck, &dir)?;
                 if !quiet {
                     println!(
                         "{}: {} ({} file(s){})",
@@ -56,7 +61,6 @@ pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> R
                         }
                     );
                 }
-                written.push(deck);
             }
             Err(refusal) => {
                 // Recorded beside the decks, so a change of the matrix shows as a diff.
@@ -69,7 +73,7 @@ pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> R
             }
         }
     }
-    Ok(written)
+    Ok(())
 }
 
 /// `grainbench decks`.
@@ -121,12 +125,7 @@ pub fn capabilities_command(scene: Option<&str>) -> Result<i32> {
             for f in decks::features(&start) {
                 print!("| `{}` |", f.key());
                 for c in Code::EXTERNAL {
-                    let s = capability::support(c, f);
-                    if s.reason().is_empty() {
-                        print!(" {} |", s.label());
-                    } else {
-                        print!(" {}: {} |", s.label(), s.reason());
-                    }
+                    print!(" {} |", capability::support(c, f).cell());
                 }
                 println!();
             }

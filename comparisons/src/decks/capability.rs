@@ -22,6 +22,13 @@ impl Support {
             Support::Unsupported(_) => "unsupported",
         }
     }
+    /// Table cell: `exact`, or the label with its reason.
+    pub fn cell(self) -> String {
+        match self.reason() {
+            "" => self.label().to_string(),
+            r => format!("{}: {r}", self.label()),
+        }
+    }
     pub fn reason(self) -> &'static str {
         match self {
             Support::Exact => "",
@@ -296,12 +303,7 @@ pub fn markdown() -> String {
     for f in Feature::ALL {
         s.push_str(&format!("| `{}` {} |", f.key(), f.describe()));
         for c in Code::EXTERNAL {
-            let sup = support(c, f);
-            if sup.reason().is_empty() {
-                s.push_str(&format!(" {} |", sup.label()));
-            } else {
-                s.push_str(&format!(" {}: {} |", sup.label(), sup.reason()));
-            }
+            s.push_str(&format!(" {} |", support(c, f).cell()));
         }
         s.push('\n');
     }
