@@ -170,7 +170,7 @@ fn run_rust(
 }
 
 /// An external code in its own work directory, with a progress line and a time limit.
-fn run_external(
+pub(crate) fn run_external(
     start: &Start,
     code: Code,
     dir: &Path,
