@@ -260,11 +260,7 @@ pub fn apply(base: &Scene, b: &Settings, s: &Settings) -> Scene {
                     *k *= k_factor;
                 }
             }
-            Step::Aggregate { kappa, .. } => {
-                if let Some(k) = kappa {
-                    *k *= k_factor;
-                }
-            }
+            Step::Aggregate { kappa: Some(k), .. } => *k *= k_factor,
             _ => {}
         }
     }
@@ -977,7 +973,7 @@ fn num(x: Option<f64>) -> String {
 fn short(x: Option<f64>) -> String {
     match x {
         None => "—".into(),
-        Some(x) if x == 0.0 => "0".into(),
+        Some(0.0) => "0".into(),
         Some(x) if !x.is_finite() || x.abs() < 1e-3 || x.abs() >= 1e4 => format!("{x:.2e}"),
         Some(x) => {
             let decimals = (2 - x.abs().log10().floor() as i32).max(0) as usize;

@@ -874,8 +874,17 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
         let max_time = step.max_time();
         let end;
         let mut checks;
+        let mut prev_force: Vec<D::V> = Vec::new();
+        let mut prev_torque: Vec<D::Ang> = Vec::new();
+        let mut flips = 0u32;
         loop {
-            for _ in 0..scene.numerics.check_every {
+            for m in 0..scene.numerics.check_every {
+                if m + 1 == scene.numerics.check_every {
+                    prev_force.clear();
+                    prev_force.extend_from_slice(&sys.force);
+                    prev_torque.clear();
+                    prev_torque.extend_from_slice(&sys.torque);
+                }
                 sys.step();
                 let (ov, i, j) = sys.max_overlap;
                 if ov.is_nan() || ov > scene.numerics.max_overlap {
@@ -905,6 +914,28 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
                     steps: sys.step - steps0,
                     checks: checks.clone(),
                 });
+            }
+            // Time step past stability: the fastest modes flip sign at every step (the
+            // integrator's amplification is real and negative) and, held by the nonlinear
+            // contacts, oscillate for ever instead of blowing up: a packing that never
+            // equilibrates, denser than it should be.
+            let flip = step_correlation(&prev_force, &sys.force)
+                .min(step_correlation(&prev_torque, &sys.torque));
+            flips = if flip < FLIP_CORRELATION && !checks.equilibrium() {
+                flips + 1
+            } else {
+                0
+            };
+            if flips >= FLIP_CHECKS {
+                return Err(unstable(
+                    scene,
+                    sys,
+                    &last_good,
+                    format!(
+                        "the net forces on the grains reverse at every time step (correlation of consecutive steps {flip:.2} at {flips} consecutive checks, force/criterion = {:.2e}): the fastest contact vibration has fewer than four time steps per period, the integration no longer follows the dynamics and the packing would be wrong",
+                        checks.force_ratio
+                    ),
+                ));
             }
             let finite = checks.kinetic_per_grain.is_finite()
                 && checks.force_ratio.is_finite()
@@ -986,6 +1017,30 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
         }
     }
     Ok(false)
+}
+
+/// Consecutive-step correlation of the net forces below which a check counts as flipping.
+const FLIP_CORRELATION: f64 = -0.5;
+/// Consecutive flipping checks (outside equilibrium) that stop a run as unstable.
+const FLIP_CHECKS: u32 = 5;
+
+/// Correlation Σ a·b / √(Σ|a|² Σ|b|²) of the net forces (or torques) of two consecutive
+/// steps: ≈ cos(ω dt) of the dominant mode, near 1 when the time step resolves the motion,
+/// negative when the dominant mode has fewer than four steps per period (ω dt > π/2), the
+/// signature of a time step past the stability of the leapfrog/velocity-Verlet scheme
+/// (ω dt < 2). 1 when there is no force.
+fn step_correlation<V: crate::geometry::Linear>(a: &[V], b: &[V]) -> f64 {
+    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        ab += x.dot(y);
+        aa += x.dot(x);
+        bb += y.dot(y);
+    }
+    if aa > 0.0 && bb > 0.0 {
+        ab / (aa * bb).sqrt()
+    } else {
+        1.0
+    }
 }
 
 /// The error for a blown-up run; `sys` is returned to the last good checkpoint to write it.
