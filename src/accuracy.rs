@@ -746,12 +746,33 @@ fn run_external(scene: &Scene, code: Code, dir: &Path, a: &Args, r: &mut Record)
             (r.phi, r.z_star, r.x0, r.forces) = (phi, z, x0, f);
         }
         None => {
-            r.status = if cr.outcome == "failed" {
+            // LAMMPS stops a blown-up run with "ERROR: Lost atoms" (or out-of-range atoms).
+            let error = ["stdout.log", "log.lammps"]
+                .iter()
+                .filter_map(|f| std::fs::read_to_string(work.join(f)).ok())
+                .flat_map(|t| {
+                    t.lines()
+                        .filter(|l| l.starts_with("ERROR"))
+                        .map(String::from)
+                        .collect::<Vec<_>>()
+                })
+                .next();
+            let blown = error
+                .as_deref()
+                .is_some_and(|e| e.contains("Lost atoms") || e.contains("Out of range"));
+            r.status = if blown {
                 "unstable".into()
             } else {
                 cr.outcome.clone()
             };
-            r.message = cr.message.clone();
+            r.message = Some(match (error, &cr.message) {
+                (Some(e), Some(m)) => format!(
+                    "{e} (numerics.dt_fraction = {}); {m}",
+                    scene.numerics.dt_fraction
+                ),
+                (Some(e), None) => e,
+                (None, m) => m.clone().unwrap_or_default(),
+            });
         }
     }
     Ok(())
@@ -760,6 +781,20 @@ fn run_external(scene: &Scene, code: Code, dir: &Path, a: &Args, r: &mut Record)
 /// The message of an unstable point up to its advice.
 fn short_message(m: &str) -> &str {
     m.split(". Try ").next().unwrap_or(m)
+}
+
+/// A status for the Markdown table: the cause without the scene name and the advice (the
+/// CSV and JSON keep the whole message).
+fn md_status(status: &str) -> String {
+    let s = status.split(". Likely cause").next().unwrap_or(status);
+    match s.split_once(": scene ") {
+        Some((head, rest)) => match rest.split_once(": ") {
+            Some((_, cause)) => format!("{head}: {cause}"),
+            None => s.to_string(),
+        },
+        None => s.to_string(),
+    }
+    .replace('|', "/")
 }
 
 struct Table {
@@ -1152,9 +1187,11 @@ fn write_outputs(out: &Path, base: &Scene, seeds: &[u64], t: &Table, a: &Args) -
             r.knob,
             format_args!("{:.3e}", r.value),
             if r.is_default { " *" } else { "" },
-            r.status.replace('|', "/"),
+            md_status(&r.status),
             short(r.wall_seconds),
-            r.steps.map_or("—".into(), |s| format!("{s:.0}")),
+            r.steps
+                .filter(|s| *s > 0.0)
+                .map_or("—".into(), |s| format!("{s:.0}")),
             g(&r.values, "phi"),
             g(&r.values, "z_star"),
             g(&r.values, "x0"),
