@@ -555,7 +555,7 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
             run.outcome = "failed".into();
             run.message = Some(format!(
                 "exited with {s}: {:?}; logs in {}",
-                compare::last_line(&dir.join("stderr.log")),
+                compare::failure_line(&dir.join("stderr.log")),
                 dir.display()
             ));
             return Ok(());

@@ -470,6 +470,20 @@ pub(crate) fn finish_external(
     }
 }
 
+/// The line of a log saying why a process failed: a Rust panic's message or an `error:`
+/// line, else the last line.
+pub(crate) fn failure_line(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().collect();
+    if let Some(k) = lines.iter().position(|l| l.contains("panicked at")) {
+        return lines[k..(k + 2).min(lines.len())].join(" ");
+    }
+    if let Some(l) = lines.iter().rev().find(|l| l.starts_with("error")) {
+        return l.to_string();
+    }
+    last_line(path)
+}
+
 /// The last non-empty line of a log (for the progress line and error messages).
 pub(crate) fn last_line(path: &Path) -> String {
     let Ok(bytes) = std::fs::read(path) else {

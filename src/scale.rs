@@ -181,6 +181,7 @@ fn scene_for(n: usize) -> Scene {
     let text = format!(
         "name = \"scale-hm3d\"\ndimension = 3\nseed = 7\n[particles]\ncount = {n}\n\
          [law]\nkind = \"hertz-mindlin\"\nkappa = 39000.0\nmu = 0.3\nzeta = 0.98\n\
+         [initial]\npacking_fraction = 0.36\n\
          [numerics]\ncell_mass = 0.01\n\
          [[protocol]]\nkind = \"compress\"\npressure = 1.0\ninertia_cap = 0.001\nmax_time = 1.0\n"
     );
@@ -319,7 +320,7 @@ pub fn sweep(a: &Args) -> Result<i32> {
                         None => format!("killed after the time limit of {} s", a.time_limit),
                         Some(s) => format!(
                             "exited with {s}: {:?}",
-                            compare::last_line(&dir.join("stderr.log"))
+                            compare::failure_line(&dir.join("stderr.log"))
                         ),
                     };
                     eprintln!("  N ≈ {n}, {t} thread(s): {why}; logs in {}", dir.display());
@@ -397,8 +398,13 @@ pub fn sweep(a: &Args) -> Result<i32> {
         line_plot(&out.join("scale"), &plot).context("drawing scale.svg/png")?;
     }
     eprintln!(
-        "wrote {}/scale.md, scale.csv, scale.json, scale.svg/png",
-        out.display()
+        "wrote {}/scale.md, scale.csv, scale.json{}",
+        out.display(),
+        if points.is_empty() {
+            ""
+        } else {
+            ", scale.svg/png"
+        }
     );
     Ok(if failures.is_empty() { 0 } else { 1 })
 }
@@ -412,7 +418,7 @@ fn scale_markdown(points: &[Point], failures: &[String], steps: u64) -> String {
     for p in points {
         let st = Stat::of(&p.segment_ns);
         s += &format!(
-            "| {} | {} | {:.1} [{:.1}–{:.1}] | {:.1} | {:.0} | {:.2} → {:.2} | {:.4} | {:.1} | {:.1} |\n",
+            "| {} | {} | {:.1} [{:.1}–{:.1}] | {:.1} | {:.0} | {:.2} → {:.2} | {:.4} | {:.2} | {:.2} |\n",
             p.n,
             p.threads,
             p.ns_per_particle_step,
