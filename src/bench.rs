@@ -69,7 +69,7 @@ pub fn bench(a: &Args) -> Result<i32> {
             a.threads[0],
         );
     }
-    if !(a.time_limit > 0.0) {
+    if a.time_limit.is_nan() || a.time_limit <= 0.0 {
         bail!("--time-limit must be a positive number of seconds");
     }
     if a.repeat == 0 {
@@ -306,6 +306,9 @@ pub struct Report {
     pub runs: Vec<Run>,
 }
 
+/// A code, its column of results, and its binary and deck (external codes that can run).
+type Setup = (Code, CodeResult, Option<(PathBuf, Deck)>);
+
 fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
     let scene = crate::load_scene(spec)?;
     let codes = if a.codes.is_empty() {
@@ -361,7 +364,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
         out.display()
     );
     // Decks and binaries once; codes that cannot run are rows without runs.
-    let mut setups: Vec<(Code, CodeResult, Option<(PathBuf, Deck)>)> = Vec::new();
+    let mut setups: Vec<Setup> = Vec::new();
     for &code in &codes {
         let mut r = CodeResult::new(code.name(), "ran");
         let ready = match (code, &start) {
@@ -644,11 +647,7 @@ pub fn loop_time(code: Code, dir: &Path) -> Option<f64> {
     }
 }
 
-fn rows_of(
-    setups: &[(Code, CodeResult, Option<(PathBuf, Deck)>)],
-    threads: &[usize],
-    runs: &[Run],
-) -> Vec<Row> {
+fn rows_of(setups: &[Setup], threads: &[usize], runs: &[Run]) -> Vec<Row> {
     let mut rows = Vec::new();
     for (code, r, _) in setups {
         for &t in threads {
