@@ -93,7 +93,8 @@ pub fn bench(a: &Args) -> Result<i32> {
     bench_scene(a, spec)
 }
 
-/// The rust child: `run` without the metrics report, quiet, no periodic checkpoints.
+/// The rust child: `run` without the metrics report or periodic checkpoints; a plain progress
+/// line every 5 s on stderr (its log).
 fn child_run(a: &Args) -> Result<i32> {
     let (Some(scene), Some(out)) = (&a.scene, &a.out) else {
         bail!("--child-run needs a scene file and --out");
@@ -101,7 +102,7 @@ fn child_run(a: &Args) -> Result<i32> {
     crate::set_threads(Some(a.threads[0]))?;
     let scene = crate::load_scene(scene)?;
     let flags = crate::RunFlags {
-        quiet: true,
+        quiet: false,
         report: false,
         resume: false,
         checkpoint_every: 1e12,
@@ -536,7 +537,14 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
         "--threads",
         &threads.to_string(),
     ]);
-    let done = compare::supervise(&mut cmd, dir, "rust", a.time_limit, a.quiet, false)?;
+    let done = compare::supervise(
+        &mut cmd,
+        dir,
+        "rust",
+        a.time_limit,
+        a.quiet,
+        Some("stderr.log"),
+    )?;
     run.peak_rss_kib = Some(peak(&done));
     run.process_seconds = Some(done.wall_seconds);
     match done.status {
@@ -602,7 +610,14 @@ fn run_external(
     compare::write_fresh_deck(deck, dir)?;
     let np = (threads > 1).then_some(threads);
     let mut cmd = compare::external_command(code, binary, deck, np, Some(threads))?;
-    let done = compare::supervise(&mut cmd, dir, code.name(), a.time_limit, a.quiet, !a.quiet)?;
+    let done = compare::supervise(
+        &mut cmd,
+        dir,
+        code.name(),
+        a.time_limit,
+        a.quiet,
+        Some("stdout.log"),
+    )?;
     run.peak_rss_kib = Some(peak(&done));
     run.wall_seconds = Some(done.wall_seconds);
     let mut res = CodeResult::new(code.name(), "ran");

@@ -182,7 +182,14 @@ fn run_external(
     };
     write_fresh_deck(&deck, dir)?;
     let mut cmd = external_command(code, &binary, &deck, a.np, None)?;
-    let done = supervise(&mut cmd, dir, code.name(), a.time_limit, a.quiet, true)?;
+    let done = supervise(
+        &mut cmd,
+        dir,
+        code.name(),
+        a.time_limit,
+        a.quiet,
+        Some("stdout.log"),
+    )?;
     r.wall_seconds = Some(done.wall_seconds);
     finish_external(code, dir, &done, a.time_limit, r)
 }
@@ -275,7 +282,7 @@ pub(crate) struct Finished {
 }
 
 /// Runs `cmd` in `dir` with stdout/stderr in `stdout.log`/`stderr.log`, a progress line from
-/// the last line of its stdout (when `progress`), the time limit and Ctrl-C (the process
+/// the last line of the log `progress` names (unless `None`), the time limit and Ctrl-C (the process
 /// group is terminated). Resource usage comes from `wait4` for this process only.
 pub(crate) fn supervise(
     cmd: &mut Command,
@@ -283,7 +290,7 @@ pub(crate) fn supervise(
     label: &str,
     time_limit: f64,
     quiet: bool,
-    progress: bool,
+    progress: Option<&str>,
 ) -> Result<Finished> {
     use std::os::unix::process::{CommandExt, ExitStatusExt};
     cmd.current_dir(dir).stdin(Stdio::null());
@@ -314,7 +321,7 @@ pub(crate) fn supervise(
         let wall = t.elapsed().as_secs_f64();
         let _ = tx.send((r, status, wall, ru.ru_maxrss.max(0) as u64));
     });
-    let bar = if quiet || !progress {
+    let bar = if quiet || progress.is_none() {
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::new_spinner();
@@ -325,7 +332,8 @@ pub(crate) fn supervise(
         b.set_prefix(label.to_string());
         b
     };
-    let plain = progress && !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let plain =
+        progress.is_some() && !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
     let mut last_plain = Instant::now();
     let mut group_rss = 0;
     let mut killed = false;
@@ -352,8 +360,8 @@ pub(crate) fn supervise(
             unsafe { libc::kill(-pid, libc::SIGKILL) };
             term_at = None;
         }
-        if progress {
-            let line = last_line(&dir.join("stdout.log"));
+        if let Some(log) = progress {
+            let line = last_line(&dir.join(log));
             bar.set_message(line.clone());
             bar.tick();
             if plain && last_plain.elapsed().as_secs_f64() >= 10.0 {

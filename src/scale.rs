@@ -296,7 +296,7 @@ pub fn sweep(a: &Args) -> Result<i32> {
             cmd.args(["bench", "--child-scale", &n.to_string(), "--steps"])
                 .arg(steps.to_string())
                 .args(["--threads", &t.to_string()]);
-            let done = compare::supervise(&mut cmd, &dir, "scale", a.time_limit, a.quiet, false)?;
+            let done = compare::supervise(&mut cmd, &dir, "scale", a.time_limit, a.quiet, None)?;
             let text = std::fs::read_to_string(dir.join("stdout.log")).unwrap_or_default();
             let parsed = text
                 .lines()
