@@ -8,7 +8,7 @@ use crate::compare::{self, Finished};
 use crate::STOP;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::CodeResult;
-use grainbench_comparisons::decks::{Code, Deck, StageKind, Start, Tolerances};
+use grainbench_comparisons::decks::{lammps_table, Code, Deck, StageKind, Start, Tolerances};
 use grainbench_engine::scene::{Criteria, Scene, Step};
 use grainbench_engine::snapshot::write_atomic;
 use serde::Serialize;
@@ -164,7 +164,20 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
             *criteria = never.clone();
             *full_time = true;
         }
-        Step::Aggregate { .. } => {}
+        // A fixed cell for S steps: no cluster count to stop on.
+        Step::Aggregate {
+            max_time,
+            mu,
+            kappa,
+        } => {
+            stage = Step::FixedVolume {
+                max_time: *max_time,
+                criteria: never.clone(),
+                full_time: true,
+                mu: *mu,
+                kappa: *kappa,
+            }
+        }
         other => unreachable!("stages() unrolls {}", other.kind()),
     }
     let mut cut = scene.clone();
@@ -175,11 +188,9 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
     // Half a step below S·dt: the time after S steps passes it whatever the rounding.
     let max_time = (steps as f64 - 0.5) * dt;
     match cut.protocol.last_mut() {
-        Some(
-            Step::Compress { max_time: t, .. }
-            | Step::FixedVolume { max_time: t, .. }
-            | Step::Aggregate { max_time: t, .. },
-        ) => *t = max_time,
+        Some(Step::Compress { max_time: t, .. } | Step::FixedVolume { max_time: t, .. }) => {
+            *t = max_time
+        }
         _ => unreachable!(),
     }
     let st = &mut start.stages[0];
@@ -375,6 +386,30 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
             }
             (_, Some(st)) => compare::prepare_external(st, code, &mut r),
             (_, None) => unreachable!("a start is made when external codes run"),
+        };
+        let ready = match (ready, code, mode, &start) {
+            // Adhesion: the bench-only LAMMPS deck (throughput only).
+            (None, Code::Lammps, Mode::Steps { .. }, Some(st))
+                if r.outcome == "refused" && st.cohesive() =>
+            {
+                match (
+                    Code::Lammps.find(),
+                    lammps_table::deck(st, lammps_table::CLASSES),
+                ) {
+                    (Some(bin), Ok(deck)) => {
+                        r.outcome = "ran".into();
+                        r.message = None;
+                        r.deviations = deck.deviations.clone();
+                        eprintln!(
+                            "lammps    bench-only deck: diameters in {} size classes, GRC07 attraction by pair_style table (approximate, throughput only)",
+                            lammps_table::CLASSES
+                        );
+                        Some((bin, deck))
+                    }
+                    _ => None,
+                }
+            }
+            (ready, ..) => ready,
         };
         if code != Code::Rust && ready.is_none() {
             eprintln!(
@@ -620,6 +655,27 @@ fn run_external(
     )?;
     run.peak_rss_kib = Some(peak(&done));
     run.wall_seconds = Some(done.wall_seconds);
+    let throughput_only = deck.files.iter().any(|(n, _)| n == lammps_table::TABLE);
+    if throughput_only && done.status.is_some_and(|s| s.success()) {
+        // No final state to read back: steps and status from the log.
+        if r.version.is_none() {
+            r.version = compare::version_line(code, &dir.join("stdout.log"));
+        }
+        run.status = Some(grainbench_comparisons::import::read_status(
+            &dir.join("final.status"),
+        ));
+        run.steps = log_steps(dir);
+        run.loop_seconds = loop_time(code, dir);
+        if run.steps.is_none() {
+            run.outcome = "failed".into();
+            run.message = Some(format!(
+                "no `Loop time` line in {}/stdout.log",
+                dir.display()
+            ));
+            run.wall_seconds = None;
+        }
+        return Ok(());
+    }
     let mut res = CodeResult::new(code.name(), "ran");
     let snap = compare::finish_external(code, dir, &done, a.time_limit, &mut res)?;
     if r.version.is_none() {
@@ -635,6 +691,24 @@ fn run_external(
         run.wall_seconds = None;
     }
     Ok(())
+}
+
+/// Steps of a LAMMPS/LIGGGHTS run: the sum of its `Loop time of … for S steps` lines.
+fn log_steps(dir: &Path) -> Option<u64> {
+    let text = std::fs::read_to_string(dir.join("stdout.log")).ok()?;
+    let steps: Vec<u64> = text
+        .lines()
+        .filter(|l| l.starts_with("Loop time of "))
+        .filter_map(|l| {
+            l.split(" for ")
+                .nth(1)?
+                .split_whitespace()
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect();
+    (!steps.is_empty()).then(|| steps.iter().sum())
 }
 
 /// Time-stepping loop time from a code's log: the sum of LAMMPS/LIGGGHTS `Loop time of X on

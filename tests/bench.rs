@@ -230,3 +230,55 @@ fn scale_sweep_writes_table_and_plot() {
         assert!(out.join(f).exists(), "{f}");
     }
 }
+
+/// GRC07 type 2 (adhesion, no rolling resistance) at N = 100: LAMMPS runs the bench-only
+/// table deck (diameters in size classes, attraction by `pair_style table`) for the same
+/// fixed steps, marked approximate.
+#[test]
+fn adhesive_scene_runs_the_bench_only_lammps_deck() {
+    if grainbench_comparisons::decks::Code::Lammps.find().is_none() {
+        eprintln!("skipped: `lmp` not installed");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let text = grainbench_engine::library::scene_text("grc07-type2-phi036")
+        .unwrap()
+        .replace("name = \"grc07-type2-phi036\"", "name = \"grc07-tiny\"")
+        .replace("count = 1400", "count = 100");
+    let scene = dir.path().join("tiny.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.path().join("b");
+    let assert = Command::cargo_bin("grainbench")
+        .unwrap()
+        .arg("bench")
+        .arg(&scene)
+        .args([
+            "--codes",
+            "rust,lammps",
+            "--steps",
+            "200",
+            "--repeat",
+            "1",
+            "-q",
+            "-o",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let stdout = String::from_utf8_lossy(&assert.get_output().stdout);
+    assert!(stdout.contains("adhesion"), "{stdout}");
+    let doc = json(&out.join("bench.json"));
+    for r in doc["runs"].as_array().unwrap() {
+        assert_eq!(r["outcome"], "ran", "{r}");
+        assert_eq!(r["steps"], 200, "{r}");
+    }
+    let lammps = row(&doc, "lammps");
+    assert!(lammps["deviations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|d| d.as_str().unwrap().contains("bench-only")));
+    let input = std::fs::read_to_string(out.join("runs/lammps-j1-1/in.lammps")).unwrap();
+    assert!(input.contains("pair_style hybrid/overlay granular table linear"));
+    assert!(input.contains("pair_coeff 1 5 table cohesion.table C_1_5"));
+}
