@@ -591,8 +591,8 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
             }
             .into();
             run.message = Some(format!(
-                "killed after {:.0} s; logs in {}",
-                done.wall_seconds,
+                "stopped at the time limit of {} s (--time-limit); logs in {}",
+                a.time_limit,
                 dir.display()
             ));
             return Ok(());

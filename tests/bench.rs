@@ -282,3 +282,35 @@ fn adhesive_scene_runs_the_bench_only_lammps_deck() {
     assert!(input.contains("pair_style hybrid/overlay granular table linear"));
     assert!(input.contains("pair_coeff 1 5 table cohesion.table C_1_5"));
 }
+
+#[test]
+fn time_limit_stops_a_run_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b");
+    let assert = Command::cargo_bin("grainbench")
+        .unwrap()
+        .args([
+            "bench",
+            "xcode-smoke",
+            "--codes",
+            "rust",
+            "--repeat",
+            "1",
+            "--time-limit",
+            "1",
+            "-q",
+            "-o",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let stdout = String::from_utf8_lossy(&assert.get_output().stdout);
+    assert!(stdout.contains("| rust | 1 | 0/1 | timeout |"), "{stdout}");
+    let doc = json(&out.join("bench.json"));
+    assert_eq!(doc["mode"]["mode"], "equilibrium");
+    assert_eq!(doc["runs"][0]["outcome"], "timeout");
+    assert!(doc["runs"][0]["message"]
+        .as_str()
+        .unwrap()
+        .contains("--time-limit"));
+}
