@@ -531,6 +531,7 @@ fn notes(mode: &Mode) -> Vec<String> {
     ];
     if let Mode::Steps { .. } = mode {
         v.push("fixed steps: the run is the scene's first DEM stage only, with equilibrium criteria set to 1e-200 so that no code stops early; the checks still run every check period, as in a real run".into());
+        v.push("fixed steps start from the scene's start, often a gas: the rates are those of that state, not of a dense packing (the equilibrium mode and `--scale` time dense ones)".into());
     }
     v
 }
