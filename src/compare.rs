@@ -177,6 +177,30 @@ pub(crate) fn run_external(
     a: &Args,
     r: &mut CodeResult,
 ) -> Result<Option<Snapshot>> {
+    let Some((binary, deck)) = prepare_external(start, code, r) else {
+        return Ok(None);
+    };
+    write_fresh_deck(&deck, dir)?;
+    let mut cmd = external_command(code, &binary, &deck, a.np, None)?;
+    let done = supervise(
+        &mut cmd,
+        dir,
+        code.name(),
+        a.time_limit,
+        a.quiet,
+        Some("stdout.log"),
+    )?;
+    r.wall_seconds = Some(done.wall_seconds);
+    finish_external(code, dir, &done, a.time_limit, r)
+}
+
+/// The binary and deck of an external code, or `None` with `r` saying why (missing binary,
+/// scene refused).
+pub(crate) fn prepare_external(
+    start: &Start,
+    code: Code,
+    r: &mut CodeResult,
+) -> Option<(PathBuf, decks::Deck)> {
     let Some(binary) = code.find() else {
         r.outcome = "missing".into();
         r.message = Some(format!(
@@ -184,26 +208,42 @@ pub(crate) fn run_external(
             code.binary(),
             code.install_hint()
         ));
-        return Ok(None);
+        return None;
     };
-    let deck = match decks::deck(start, code) {
-        Ok(d) => d,
+    match decks::deck(start, code) {
+        Ok(d) => {
+            r.deviations = d.deviations.clone();
+            Some((binary, d))
+        }
         Err(refusal) => {
             r.outcome = "refused".into();
             r.message = Some(refusal.to_string());
-            return Ok(None);
+            None
         }
-    };
-    r.deviations = deck.deviations.clone();
-    // A fresh work directory: old dumps must not be read as this run's.
+    }
+}
+
+/// Writes `deck` into a fresh `dir` (old dumps must not be read as this run's).
+pub(crate) fn write_fresh_deck(deck: &decks::Deck, dir: &Path) -> Result<()> {
     if dir.exists() {
         std::fs::remove_dir_all(dir).with_context(|| format!("clearing {}", dir.display()))?;
     }
-    crate::xcode::write_deck(&deck, dir)?;
-    let mut cmd = match (a.np, code) {
+    crate::xcode::write_deck(deck, dir)
+}
+
+/// The command running `deck`: LAMMPS and LIGGGHTS under `mpirun -np K` when `np` is given,
+/// YADE with `-j threads` when given.
+pub(crate) fn external_command(
+    code: Code,
+    binary: &Path,
+    deck: &decks::Deck,
+    np: Option<usize>,
+    yade_threads: Option<usize>,
+) -> Result<Command> {
+    let mut cmd = match (np, code) {
         (Some(k), Code::Lammps | Code::Liggghts) => {
             let Some(mpirun) = decks::which("mpirun") else {
-                bail!("--np needs `mpirun` (Debian: apt-get install -y --no-install-recommends openmpi-bin)");
+                bail!("running {code} on {k} processes needs `mpirun` (Debian: apt-get install -y --no-install-recommends openmpi-bin)");
             };
             let mut c = Command::new(mpirun);
             c.args([
@@ -212,24 +252,76 @@ pub(crate) fn run_external(
                 "-np",
                 &k.to_string(),
             ]);
-            c.arg(&binary);
+            c.arg(binary);
             c
         }
-        _ => Command::new(&binary),
+        _ => Command::new(binary),
     };
-    cmd.args(&deck.args).current_dir(dir).stdin(Stdio::null());
-    let stdout = std::fs::File::create(dir.join("stdout.log"))?;
-    let stderr = std::fs::File::create(dir.join("stderr.log"))?;
-    cmd.stdout(stdout).stderr(stderr);
+    if let (Some(t), Code::Yade) = (yade_threads, code) {
+        cmd.args(["-j", &t.to_string()]);
+    }
+    cmd.args(&deck.args);
     if code == Code::Yade {
         // YADE opens local ports and reads its own environment; keep it headless.
         cmd.env("DISPLAY", "");
     }
+    Ok(cmd)
+}
+
+/// How a supervised child process ended.
+pub(crate) struct Finished {
+    /// Exit status; `None` when killed at the time limit or by Ctrl-C.
+    pub status: Option<std::process::ExitStatus>,
+    /// From the start to the reaping of the process.
+    pub wall_seconds: f64,
+    /// `ru_maxrss` of the process (`wait4`), KiB: its largest resident set, or that of its
+    /// largest waited-for descendant (e.g. one MPI rank under `mpirun`).
+    pub max_rss_kib: u64,
+    /// Largest sum of the resident sets of its process group, sampled every 0.25 s, KiB.
+    pub group_rss_kib: u64,
+}
+
+/// Runs `cmd` in `dir` with stdout/stderr in `stdout.log`/`stderr.log`, a progress line from
+/// the last line of the log `progress` names (unless `None`), the time limit and Ctrl-C (the process
+/// group is terminated). Resource usage comes from `wait4` for this process only.
+pub(crate) fn supervise(
+    cmd: &mut Command,
+    dir: &Path,
+    label: &str,
+    time_limit: f64,
+    quiet: bool,
+    progress: Option<&str>,
+) -> Result<Finished> {
+    use std::os::unix::process::{CommandExt, ExitStatusExt};
+    cmd.current_dir(dir).stdin(Stdio::null());
+    let stdout = std::fs::File::create(dir.join("stdout.log"))?;
+    let stderr = std::fs::File::create(dir.join("stderr.log"))?;
+    cmd.stdout(stdout).stderr(stderr);
+    // Its own process group: a time-limit kill reaches mpirun's ranks too.
+    cmd.process_group(0);
     let t = Instant::now();
-    let mut child = cmd
+    let child = cmd
         .spawn()
-        .with_context(|| format!("starting {}", binary.display()))?;
-    let bar = if a.quiet {
+        .with_context(|| format!("starting {:?}", cmd.get_program()))?;
+    let pid = child.id() as libc::pid_t;
+    // Reaped by wait4 in the waiter thread (for its rusage), not by `Child`.
+    drop(child);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut status = 0;
+        // SAFETY: an all-zero rusage is a valid value; wait4 only writes into it.
+        let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+        let r = loop {
+            // SAFETY: plain system call on our own child with valid pointers.
+            let r = unsafe { libc::wait4(pid, &mut status, 0, &mut ru) };
+            if r >= 0 || std::io::Error::last_os_error().kind() != std::io::ErrorKind::Interrupted {
+                break r;
+            }
+        };
+        let wall = t.elapsed().as_secs_f64();
+        let _ = tx.send((r, status, wall, ru.ru_maxrss.max(0) as u64));
+    });
+    let bar = if quiet || progress.is_none() {
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::new_spinner();
@@ -237,35 +329,116 @@ pub(crate) fn run_external(
             ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix} {msg}")
                 .expect("template"),
         );
-        b.set_prefix(code.name());
+        b.set_prefix(label.to_string());
         b
     };
-    let plain = !a.quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let plain =
+        progress.is_some() && !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
     let mut last_plain = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait()? {
-            break Some(s);
+    let mut group_rss = 0;
+    let mut killed = false;
+    let mut term_at: Option<Instant> = None;
+    let (r, status, wall, max_rss) = loop {
+        match rx.recv_timeout(Duration::from_millis(250)) {
+            Ok(v) => break v,
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                bail!("lost the waiter of process {pid}")
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
         }
+        group_rss = group_rss.max(process_group_rss_kib(pid));
         let elapsed = t.elapsed().as_secs_f64();
-        if elapsed > a.time_limit || STOP.load(Ordering::SeqCst) {
-            let _ = child.kill();
-            let _ = child.wait();
-            break None;
+        if !killed && (elapsed > time_limit || STOP.load(Ordering::SeqCst)) {
+            killed = true;
+            term_at = Some(Instant::now());
+            // SAFETY: signals the process group we created (not yet reaped: the waiter has
+            // not reported).
+            unsafe { libc::kill(-pid, libc::SIGTERM) };
         }
-        let line = last_line(&dir.join("stdout.log"));
-        bar.set_message(line.clone());
-        bar.tick();
-        if plain && last_plain.elapsed().as_secs_f64() >= 10.0 {
-            last_plain = Instant::now();
-            eprintln!("  {} [{elapsed:.0} s] {line}", code.name());
+        if term_at.is_some_and(|k| k.elapsed().as_secs_f64() > 5.0) {
+            // SAFETY: as above.
+            unsafe { libc::kill(-pid, libc::SIGKILL) };
+            term_at = None;
         }
-        std::thread::sleep(Duration::from_millis(250));
+        if let Some(log) = progress {
+            let line = last_line(&dir.join(log));
+            bar.set_message(line.clone());
+            bar.tick();
+            if plain && last_plain.elapsed().as_secs_f64() >= 10.0 {
+                last_plain = Instant::now();
+                eprintln!("  {label} [{elapsed:.0} s] {line}");
+            }
+        }
     };
     bar.finish_and_clear();
-    r.wall_seconds = Some(t.elapsed().as_secs_f64());
+    if killed {
+        // Ranks left behind by a killed mpirun.
+        // SAFETY: the group id is that of our child; a group without members is a no-op.
+        unsafe { libc::kill(-pid, libc::SIGKILL) };
+    }
+    if r < 0 {
+        bail!(
+            "waiting for process {pid}: {}",
+            std::io::Error::last_os_error()
+        );
+    }
+    Ok(Finished {
+        status: (!killed).then(|| std::process::ExitStatus::from_raw(status)),
+        wall_seconds: wall,
+        max_rss_kib: max_rss,
+        group_rss_kib: group_rss,
+    })
+}
+
+/// Sum of VmRSS over the processes of process group `pgid`, KiB (0 where /proc is absent).
+fn process_group_rss_kib(pgid: libc::pid_t) -> u64 {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return 0;
+    };
+    let mut sum = 0;
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(pid) = name
+            .to_str()
+            .filter(|n| n.bytes().all(|b| b.is_ascii_digit()))
+        else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+            continue;
+        };
+        // Fields after the parenthesised command: state ppid pgrp …
+        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+            continue;
+        };
+        if rest.split_whitespace().nth(2) != Some(&pgid.to_string()) {
+            continue;
+        }
+        if let Ok(st) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
+            if let Some(kb) = st
+                .lines()
+                .find(|l| l.starts_with("VmRSS:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse::<u64>().ok())
+            {
+                sum += kb;
+            }
+        }
+    }
+    sum
+}
+
+/// The outcome of a finished external run, and its final state read back.
+pub(crate) fn finish_external(
+    code: Code,
+    dir: &Path,
+    done: &Finished,
+    time_limit: f64,
+    r: &mut CodeResult,
+) -> Result<Option<Snapshot>> {
     r.version = version_line(code, &dir.join("stdout.log"));
     let logs = format!("logs in {}", dir.display());
-    match status {
+    match done.status {
         None if STOP.load(Ordering::SeqCst) => {
             r.outcome = "interrupted".into();
             r.message = Some(logs);
@@ -274,8 +447,7 @@ pub(crate) fn run_external(
         None => {
             r.outcome = "timeout".into();
             r.message = Some(format!(
-                "killed after the time limit of {} s (--time-limit); {logs}",
-                a.time_limit
+                "killed after the time limit of {time_limit} s (--time-limit); {logs}"
             ));
             return Ok(None);
         }
@@ -306,8 +478,22 @@ pub(crate) fn run_external(
     }
 }
 
+/// The line of a log saying why a process failed: a Rust panic's message or an `error:`
+/// line, else the last line.
+pub(crate) fn failure_line(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().collect();
+    if let Some(k) = lines.iter().position(|l| l.contains("panicked at")) {
+        return lines[k..(k + 2).min(lines.len())].join(" ");
+    }
+    if let Some(l) = lines.iter().rev().find(|l| l.starts_with("error")) {
+        return l.to_string();
+    }
+    last_line(path)
+}
+
 /// The last non-empty line of a log (for the progress line and error messages).
-fn last_line(path: &Path) -> String {
+pub(crate) fn last_line(path: &Path) -> String {
     let Ok(bytes) = std::fs::read(path) else {
         return String::new();
     };
@@ -334,7 +520,7 @@ fn last_line(path: &Path) -> String {
 }
 
 /// The code's own version line from its output.
-fn version_line(code: Code, stdout: &Path) -> Option<String> {
+pub(crate) fn version_line(code: Code, stdout: &Path) -> Option<String> {
     let text = std::fs::read_to_string(stdout).ok()?;
     let key = match code {
         Code::Lammps => "LAMMPS (",

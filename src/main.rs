@@ -10,8 +10,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 mod accuracy;
+mod bench;
 mod compare;
 mod reproduce;
+mod scale;
 mod xcode;
 
 /// Set by the first Ctrl-C (or SIGTERM): runs stop cleanly at their next check.
@@ -210,6 +212,11 @@ enum Command {
         #[arg(long, default_value_t = 60.0, value_name = "SECS")]
         checkpoint_every: f64,
     },
+    /// Time a scene in our engine and in LAMMPS, LIGGGHTS and YADE from the same start, runs
+    /// alternated, each code a child process: particle-steps/s, time and steps to equilibrium
+    /// (or `--steps S` fixed steps), peak RSS, ratio to ours (bench.md/csv/json). `--scale
+    /// N,…` times our engine alone on dense packings of growing size (scale.md/csv/json/svg).
+    Bench(bench::Args),
 }
 
 #[derive(Subcommand)]
@@ -389,6 +396,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             out,
         } => xcode::decks_command(&scenes, all, &codes, out),
         Command::Capabilities { scene } => xcode::capabilities_command(scene.as_deref()),
+        Command::Bench(args) => bench::bench(&args),
         Command::Scenes => {
             for (name, text) in library::SCENES {
                 let scene = Scene::from_toml(text, Path::new(name))?;

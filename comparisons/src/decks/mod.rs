@@ -7,10 +7,12 @@
 //!   lengths in a, masses in the mass of a grain of diameter a, forces in the scene's unit.
 //! * [`capability`]: the capability matrix, one [`Support`] per [`Feature`] and [`Code`].
 //! * [`lammps`], [`liggghts`], [`yade`]: one generator per code (one style, one file).
+//! * [`lammps_table`]: a bench-only (throughput) LAMMPS deck for adhesive scenes.
 //! * [`decks_for`]: every deck of a scene, refusing unsupported features with what is missing.
 
 pub mod capability;
 pub mod lammps;
+pub mod lammps_table;
 pub mod liggghts;
 pub mod yade;
 
