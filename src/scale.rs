@@ -2,9 +2,9 @@
 //! our engine on dense 3D Hertz–Mindlin packings (κ = 39000, μ = 0.3, ζ = 0.98) of growing
 //! size, each size in a child process of its own so that the high-water marks do not mix.
 //!
-//! The packing is a jittered FCC lattice (nearest-neighbour distance = the diameter, every
-//! coordinate moved by up to 1e-3 a): about half of the 12 lattice bonds overlap, so z ≈ 6,
-//! made in O(N) without any compression run. The cell is stress-controlled (P = 1) with a
+//! The packing is a dense random packing of at most 1000 spheres (a gas compressed fast, as
+//! the step benchmark prepares one) tiled k×k×k times: periodic copies of a periodic packing
+//! are a packing, so the 1e6-sphere case costs one 1000-sphere compression and an O(N) copy. The cell is stress-controlled (P = 1) with a
 //! small strain-rate cap (1e-3) so that it stays dense over the timed steps; it is not
 //! equilibrated.
 
@@ -15,21 +15,22 @@ use grainbench_comparisons::plots::{line_plot, Axis, LinePlot, Marks, Series};
 use grainbench_engine::cell::{Cell, Control};
 use grainbench_engine::contact::slider::Coulomb;
 use grainbench_engine::geometry::{Dim, Linear as _, D3};
-use grainbench_engine::run::{cell_mass, hertz_mindlin_law, time_step};
+use grainbench_engine::run::{
+    build_system, cell_mass, hertz_mindlin_law, run_protocol, time_step, Progress, RunOptions,
+};
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;
 use grainbench_engine::system::System;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::process::Command;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Steps timed per size unless `--steps` says otherwise.
 pub const DEFAULT_STEPS: u64 = 100;
 /// Timed segments per size (the reported cost is their median).
 const SEGMENTS: u64 = 5;
-/// Largest displacement of a lattice site per coordinate, in diameters.
-const JITTER: f64 = 1e-3;
 
 /// What a child reports for one size.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -37,8 +38,9 @@ pub struct Point {
     pub n: usize,
     pub threads: usize,
     pub steps: u64,
-    /// FCC cells along each axis.
-    pub cells: [usize; 3],
+    /// Copies per axis of the random base packing, and its grains.
+    pub copies: usize,
+    pub base: usize,
     pub prepare_seconds: f64,
     /// ns per particle-step of each segment.
     pub segment_ns: Vec<f64>,
@@ -57,124 +59,100 @@ pub struct Point {
     pub wall_seconds: f64,
 }
 
-/// FCC cells (kx, ky, kz) with 4·kx·ky·kz closest to `n`, as cubic as the factors allow.
-pub fn fcc_cells(n: usize) -> [usize; 3] {
-    let m = (n as f64 / 4.0).round().max(1.0) as usize;
-    let mut best = [1, 1, m];
-    let mut best_score = (usize::MAX, f64::INFINITY);
-    let c = (m as f64).cbrt();
-    let lo = (c * 0.6).floor().max(1.0) as usize;
-    let hi = (c * 1.6).ceil() as usize + 1;
-    for kx in lo..=hi {
-        for ky in kx..=hi {
-            let kz = ((m as f64) / (kx * ky) as f64).round().max(1.0) as usize;
-            if kz < ky {
-                continue;
-            }
-            let miss = (4 * kx * ky * kz).abs_diff(n);
-            let aspect = kz as f64 / kx as f64;
-            if (miss, aspect) < best_score {
-                best_score = (miss, aspect);
-                best = [kx, ky, kz];
-            }
+/// Largest random packing that is tiled: sizes up to `BASE`·k³ are k×k×k copies of one.
+const BASE: usize = 1000;
+
+/// Copies per axis k and grains per copy for about `n` grains: k = ⌊(n/BASE)^⅓⌋ (at least 1).
+pub fn tiling(n: usize) -> (usize, usize) {
+    let mut k = ((n as f64 / BASE as f64).cbrt().floor() as usize).max(1);
+    while k > 1 && (k * k * k) > n {
+        k -= 1;
+    }
+    (
+        k,
+        ((n as f64) / (k * k * k) as f64).round().max(2.0) as usize,
+    )
+}
+
+/// Gas at Φ = 0.3 compressed at P = 1 with a large strain-rate cap (0.1) until Φ ≥ 0.58:
+/// a dense random packing (as `engine/benches/common/packings.rs` prepares for the step
+/// benchmark), its reduced positions and cell lengths.
+fn random_packing(n: usize) -> Result<(Vec<<D3 as Dim>::V>, <D3 as Dim>::V)> {
+    let text = format!(
+        "name = \"scale-base\"\ndimension = 3\nseed = 7\n[particles]\ncount = {n}\n\
+         [law]\nkind = \"hertz-mindlin\"\nkappa = 39000.0\nmu = 0.3\nzeta = 0.98\n\
+         [initial]\npacking_fraction = 0.3\n[numerics]\ncell_mass = 0.01\n\
+         [[protocol]]\nkind = \"compress\"\npressure = 1.0\ninertia_cap = 0.1\nmax_time = 5.0\n"
+    );
+    let scene = Scene::from_toml(&text, Path::new("scale-base.toml"))
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let law = hertz_mindlin_law(&scene.law, Coulomb { mu: 0.3 });
+    let mut sys = build_system::<D3, _>(&scene, law).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let stop = AtomicBool::new(false);
+    let mut progress = |p: &Progress| {
+        if p.checks.packing_fraction >= 0.58 {
+            stop.store(true, Ordering::Relaxed);
         }
-    }
-    best
+    };
+    let mut opts = RunOptions {
+        progress: Some(&mut progress),
+        stop: Some(&stop),
+        ..Default::default()
+    };
+    run_protocol(&scene, &mut sys, &mut opts).map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok((sys.s.clone(), sys.cell.l))
 }
 
-/// SplitMix64: a fixed, dependency-free stream of jitters.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e3779b97f4a7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-const BASIS: [[usize; 3]; 4] = [[0, 0, 0], [1, 1, 0], [1, 0, 1], [0, 1, 1]];
-/// Side of the cubic FCC cell for a nearest-neighbour distance of 1.
-const SIDE: f64 = std::f64::consts::SQRT_2;
-
-fn index(cells: [usize; 3], c: [usize; 3], b: usize) -> usize {
-    ((c[0] * cells[1] + c[1]) * cells[2] + c[2]) * 4 + b
-}
-
-/// Reduced positions of the jittered lattice and the cell lengths.
-fn lattice(cells: [usize; 3], seed: u64) -> (Vec<<D3 as Dim>::V>, <D3 as Dim>::V) {
-    let mut l = <D3 as Dim>::V::zero();
-    for a in 0..3 {
-        l[a] = SIDE * cells[a] as f64;
-    }
-    let mut rng = SplitMix(seed);
-    let n = 4 * cells.iter().product::<usize>();
-    let mut s = vec![<D3 as Dim>::V::zero(); n];
-    for cx in 0..cells[0] {
-        for cy in 0..cells[1] {
-            for cz in 0..cells[2] {
-                let c = [cx, cy, cz];
-                for (b, half) in BASIS.iter().enumerate() {
-                    let i = index(cells, c, b);
+/// `k`×`k`×`k` periodic copies of a packing (reduced positions `s`, lengths `l`): a valid
+/// packing of k³ times as many grains, made in O(N).
+fn tile(
+    s: &[<D3 as Dim>::V],
+    l: <D3 as Dim>::V,
+    k: usize,
+) -> (Vec<<D3 as Dim>::V>, <D3 as Dim>::V) {
+    let kf = k as f64;
+    let mut out = Vec::with_capacity(s.len() * k * k * k);
+    for cx in 0..k {
+        for cy in 0..k {
+            for cz in 0..k {
+                let c = [cx as f64, cy as f64, cz as f64];
+                for x in s {
+                    let mut y = *x;
                     for a in 0..3 {
-                        let r = SIDE * (c[a] as f64 + 0.5 * half[a] as f64)
-                            + JITTER * (2.0 * rng.uniform() - 1.0);
-                        s[i][a] = (r / l[a]).rem_euclid(1.0);
+                        y[a] = (x[a] + c[a]) / kf;
                     }
+                    out.push(y);
                 }
             }
         }
     }
-    (s, l)
+    let mut lk = l;
+    for a in 0..3 {
+        lk[a] = l[a] * kf;
+    }
+    (out, lk)
 }
 
-/// Overlapping lattice bonds per grain ×2 (z), from the 12 lattice neighbours of each grain.
-fn lattice_z(cells: [usize; 3], position: impl Fn(usize) -> [f64; 3], l: [f64; 3]) -> f64 {
-    let n = 4 * cells.iter().product::<usize>();
+/// Coordination number: twice the overlapping listed pairs per grain (no allocation).
+fn coordination<L: grainbench_engine::contact::ContactLaw<D3>>(sys: &System<D3, L>) -> f64 {
+    let l = sys.cell.l;
     let mut contacts = 0usize;
-    for cx in 0..cells[0] {
-        for cy in 0..cells[1] {
-            for cz in 0..cells[2] {
-                for (b, half) in BASIS.iter().enumerate() {
-                    let i = index(cells, [cx, cy, cz], b);
-                    let q = [2 * cx + half[0], 2 * cy + half[1], 2 * cz + half[2]];
-                    let pi = position(i);
-                    for (p0, p1) in [(0, 1), (0, 2), (1, 2)] {
-                        for (s0, s1) in [(1, 1), (1, -1), (-1, 1), (-1, -1)] {
-                            let mut qq = [q[0] as i64, q[1] as i64, q[2] as i64];
-                            qq[p0] += s0;
-                            qq[p1] += s1;
-                            let mut c = [0; 3];
-                            let mut parity = [0; 3];
-                            for a in 0..3 {
-                                let m = 2 * cells[a] as i64;
-                                let v = qq[a].rem_euclid(m) as usize;
-                                c[a] = v / 2;
-                                parity[a] = v % 2;
-                            }
-                            let bj = BASIS.iter().position(|h| *h == parity).expect("FCC site");
-                            let j = index(cells, c, bj);
-                            let pj = position(j);
-                            let mut d2 = 0.0;
-                            for a in 0..3 {
-                                let mut d = pj[a] - pi[a];
-                                d -= l[a] * (d / l[a]).round();
-                                d2 += d * d;
-                            }
-                            if d2 < 1.0 {
-                                contacts += 1;
-                            }
-                        }
-                    }
-                }
+    for i in 0..sys.len() {
+        for k in sys.nlist.row(i) {
+            let j = sys.nlist.partner[k] as usize;
+            let mut d2 = 0.0;
+            for a in 0..3 {
+                let mut d = sys.s[j][a] - sys.s[i][a];
+                d -= d.round();
+                d2 += (d * l[a]) * (d * l[a]);
+            }
+            let reach = sys.radius[i] + sys.radius[j];
+            if d2 < reach * reach {
+                contacts += 1;
             }
         }
     }
-    // Each bond was seen from both ends.
-    contacts as f64 / n as f64
+    2.0 * contacts as f64 / sys.len() as f64
 }
 
 fn scene_for(n: usize) -> Scene {
@@ -198,16 +176,12 @@ fn vm_hwm() -> Option<u64> {
 pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
     crate::set_threads(Some(threads))?;
     let t0 = Instant::now();
-    let cells = fcc_cells(n_wanted);
-    let n = 4 * cells.iter().product::<usize>();
+    let (copies, base) = tiling(n_wanted);
+    let (s0, l0) = random_packing(base)?;
+    let (s, l) = tile(&s0, l0, copies);
+    drop(s0);
+    let n = s.len();
     let scene = scene_for(n);
-    let (s, l) = lattice(cells, 7);
-    let la = [l[0], l[1], l[2]];
-    let z_start = lattice_z(
-        cells,
-        |i| [s[i][0] * l[0], s[i][1] * l[1], s[i][2] * l[2]],
-        la,
-    );
     let volume = l[0] * l[1] * l[2];
     let mut cell = Cell::<D3>::new(l, cell_mass(&scene.numerics, n as f64, volume, 3));
     let mut target = <D3 as Dim>::V::zero();
@@ -222,8 +196,9 @@ pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
     let mut sys = System::new(law, cell, s, &vec![1.0; n], scene.numerics.skin);
     sys.dt = time_step(&scene, &sys).0;
     let segment = (steps / SEGMENTS).max(1);
-    let (prepare_seconds, segment_ns) = rayon::scope(|_| {
+    let (prepare_seconds, z_start, segment_ns) = rayon::scope(|_| {
         sys.init_forces();
+        let z_start = coordination(&sys);
         let prep = t0.elapsed().as_secs_f64();
         let mut ns = Vec::new();
         for _ in 0..SEGMENTS {
@@ -233,23 +208,16 @@ pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
             }
             ns.push(t.elapsed().as_secs_f64() * 1e9 / (segment as f64 * n as f64));
         }
-        (prep, ns)
+        (prep, z_start, ns)
     });
     let vm_hwm_bytes = vm_hwm();
-    let l = sys.cell.l;
-    let z_end = lattice_z(
-        cells,
-        |i| {
-            let p = sys.position(i);
-            [p[0], p[1], p[2]]
-        },
-        [l[0], l[1], l[2]],
-    );
+    let z_end = coordination(&sys);
     let point = Point {
         n,
         threads,
         steps: segment * SEGMENTS,
-        cells,
+        copies,
+        base,
         prepare_seconds,
         ns_per_particle_step: Stat::of(&segment_ns).map_or(f64::NAN, |s| s.median),
         segment_ns,
@@ -334,7 +302,7 @@ pub fn sweep(a: &Args) -> Result<i32> {
     let doc = serde_json::json!({
         "command": std::env::args().collect::<Vec<_>>().join(" "),
         "steps": steps,
-        "packing": "jittered FCC (±1e-3 a per coordinate), 3D Hertz–Mindlin κ = 39000, μ = 0.3, ζ = 0.98, stress-controlled cell P = 1, rate cap 1e-3",
+        "packing": "random packing of ≤ 1000 spheres (gas Φ = 0.3 compressed at P = 1, I ≤ 0.1, to Φ ≥ 0.58) tiled k×k×k, 3D Hertz–Mindlin κ = 39000, μ = 0.3, ζ = 0.98, stress-controlled cell P = 1, rate cap 1e-3",
         "points": points,
         "failures": failures,
     });
@@ -411,7 +379,7 @@ pub fn sweep(a: &Args) -> Result<i32> {
 
 fn scale_markdown(points: &[Point], failures: &[String], steps: u64) -> String {
     let mut s = format!(
-        "## grainbench bench --scale: dense 3D Hertz–Mindlin (jittered FCC, κ = 39000, μ = 0.3), {steps} steps per size\n\n"
+        "## grainbench bench --scale: dense 3D Hertz–Mindlin (random packing tiled k×k×k, κ = 39000, μ = 0.3), {steps} steps per size\n\n"
     );
     s += "| N | threads | ns / particle-step (median [min–max] of 5 segments) | peak RSS MiB | bytes / particle | z start → end | Φ | prepare s | wall s |\n";
     s += "| ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: |\n";
@@ -446,24 +414,31 @@ mod tests {
     use super::*;
 
     #[test]
-    fn fcc_cells_hit_round_sizes() {
-        for n in [1000, 10000, 100000, 1000000] {
-            let c = fcc_cells(n);
-            let m = 4 * c[0] * c[1] * c[2];
-            assert!((m as f64 - n as f64).abs() <= 0.02 * n as f64, "{n}: {c:?}");
-            assert!(c[2] as f64 / c[0] as f64 <= 3.0, "{n}: {c:?}");
-        }
+    fn tiling_hits_round_sizes() {
+        assert_eq!(tiling(1000), (1, 1000));
+        assert_eq!(tiling(8000), (2, 1000));
+        assert_eq!(tiling(125_000), (5, 1000));
+        assert_eq!(tiling(1_000_000), (10, 1000));
+        assert_eq!(tiling(500), (1, 500));
+        assert_eq!(tiling(10_000), (2, 1250));
     }
 
     #[test]
-    fn jittered_lattice_has_about_six_contacts() {
-        let cells = [4, 4, 5];
-        let (s, l) = lattice(cells, 7);
-        let z = lattice_z(
-            cells,
-            |i| [s[i][0] * l[0], s[i][1] * l[1], s[i][2] * l[2]],
-            [l[0], l[1], l[2]],
-        );
-        assert!((4.5..7.5).contains(&z), "z = {z}");
+    fn tiled_copies_are_periodic_images() {
+        let s = vec![[0.1, 0.2, 0.3].into(), [0.9, 0.5, 0.05].into()];
+        let l: <D3 as Dim>::V = [2.0, 3.0, 4.0].into();
+        let (t, lk) = tile(&s, l, 2);
+        assert_eq!(t.len(), 16);
+        assert_eq!([lk[0], lk[1], lk[2]], [4.0, 6.0, 8.0]);
+        // Every copy is the base shifted by whole base cells.
+        for (c, chunk) in t.chunks(2).enumerate() {
+            for (x, y) in s.iter().zip(chunk) {
+                for a in 0..3 {
+                    let shift = (y[a] * 2.0 - x[a]) * l[a];
+                    assert!((shift - shift.round()).abs() < 1e-12, "copy {c}");
+                    assert!((0.0..1.0).contains(&y[a]));
+                }
+            }
+        }
     }
 }
