@@ -217,6 +217,51 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
     }
 }
 
+/// Spreads the low 21 bits of `x` to every third bit (3D Morton interleave).
+#[inline(always)]
+fn spread3(x: u64) -> u64 {
+    let mut x = x & 0x1f_ffff;
+    x = (x | x << 32) & 0x1f_0000_0000_ffff;
+    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    (x | x << 2) & 0x1249_2492_4924_9249
+}
+
+/// Spreads the low 32 bits of `x` to every second bit (2D Morton interleave).
+#[inline(always)]
+fn spread2(x: u64) -> u64 {
+    let mut x = x & 0xffff_ffff;
+    x = (x | x << 16) & 0x0000_ffff_0000_ffff;
+    x = (x | x << 8) & 0x00ff_00ff_00ff_00ff;
+    x = (x | x << 4) & 0x0f0f_0f0f_0f0f_0f0f;
+    x = (x | x << 2) & 0x3333_3333_3333_3333;
+    (x | x << 1) & 0x5555_5555_5555_5555
+}
+
+/// Indices of the reduced positions `s` (in [0,1)^d) in Morton (Z-curve) order; ties keep
+/// their input order, so the result is deterministic.
+pub fn morton_order<D: Dim>(s: &[D::V]) -> Vec<u32> {
+    let bits = if D::D == 3 { 21 } else { 32 };
+    let scale = (1u64 << bits) as f64;
+    let top = (1u64 << bits) - 1;
+    let key = |x: &D::V| -> u64 {
+        let q = |a: usize| ((x[a] * scale) as u64).min(top);
+        if D::D == 3 {
+            spread3(q(0)) | spread3(q(1)) << 1 | spread3(q(2)) << 2
+        } else {
+            spread2(q(0)) | spread2(q(1)) << 1
+        }
+    };
+    let mut keyed: Vec<(u64, u32)> = s
+        .iter()
+        .enumerate()
+        .map(|(i, x)| (key(x), i as u32))
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
 /// Nearest periodic image of a reduced separation with components in (−1, 1).
 #[inline(always)]
 pub fn min_image<D: Dim>(ds: &mut D::V) {
@@ -281,6 +326,20 @@ mod tests {
             }
         }
         v
+    }
+
+    #[test]
+    fn morton_order_is_a_permutation_along_the_curve() {
+        let s = vec![
+            Vector2::new(0.9, 0.9),
+            Vector2::new(0.1, 0.1),
+            Vector2::new(0.9, 0.1),
+            Vector2::new(0.1, 0.9),
+        ];
+        assert_eq!(morton_order::<D2>(&s), vec![1, 2, 3, 0]);
+        let s3 = vec![Vector3::new(0.7, 0.2, 0.6), Vector3::new(0.2, 0.7, 0.1)];
+        assert_eq!(morton_order::<D3>(&s3), vec![1, 0]);
+        assert_eq!(spread3(0b111), 0b1001001);
     }
 
     #[test]
