@@ -98,13 +98,13 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         let total: usize = ncell[..D::D].iter().product();
         // Counting sort of grains into cells.
         let mut head = vec![0u32; total + 1];
-        let cells: Vec<usize> = if brute {
+        let cells: Vec<u32> = if brute {
             vec![0; n]
         } else {
-            s.iter().map(cell_of).collect()
+            s.par_iter().map(|x| cell_of(x) as u32).collect()
         };
         for &c in &cells {
-            head[c + 1] += 1;
+            head[c as usize + 1] += 1;
         }
         for c in 0..total {
             head[c + 1] += head[c];
@@ -112,9 +112,11 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         let mut fill = head.clone();
         let mut order = vec![0u32; n];
         for (i, &c) in cells.iter().enumerate() {
+            let c = c as usize;
             order[fill[c] as usize] = i as u32;
             fill[c] += 1;
         }
+        drop(cells);
         let skin = self.skin;
         let listed = |i: usize, j: usize| -> bool {
             let mut ds = s[j] - s[i];
@@ -123,15 +125,16 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
             let cut = radius[i] + radius[j] + range + skin;
             r.norm_squared() < cut * cut
         };
-        let row_of = |i: usize| -> Vec<u32> {
-            let mut row = Vec::new();
+        // Appends row i (ascending partners) to `row`.
+        let row_of = |i: usize, row: &mut Vec<u32>| {
+            let first = row.len();
             if brute {
                 for j in i + 1..n {
                     if listed(i, j) {
                         row.push(j as u32);
                     }
                 }
-                return row;
+                return;
             }
             let mut ci = [0usize; 3];
             for a in 0..D::D {
@@ -162,16 +165,30 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
                     }
                 }
             }
-            row.sort_unstable();
-            row
+            row[first..].sort_unstable();
         };
-        let rows: Vec<Vec<u32>> = (0..n).into_par_iter().map(row_of).collect();
+        // Rows in fixed chunks, each chunk one buffer of partners and one of row ends (one
+        // allocation per chunk rather than per grain: less transient memory at large N).
+        let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(ROW_CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let rows = c * ROW_CHUNK..((c + 1) * ROW_CHUNK).min(n);
+                let mut ends = Vec::with_capacity(rows.len());
+                let mut part = Vec::new();
+                for i in rows {
+                    row_of(i, &mut part);
+                    ends.push(part.len() as u32);
+                }
+                (ends, part)
+            })
+            .collect();
         let mut row_start = Vec::with_capacity(n + 1);
         row_start.push(0u32);
-        let mut partner = Vec::with_capacity(rows.iter().map(|r| r.len()).sum());
-        for r in &rows {
-            partner.extend_from_slice(r);
-            row_start.push(partner.len() as u32);
+        let mut partner = Vec::with_capacity(chunks.iter().map(|c| c.1.len()).sum());
+        for (ends, part) in chunks {
+            let base = partner.len() as u32;
+            row_start.extend(ends.iter().map(|e| base + e));
+            partner.extend_from_slice(&part);
         }
         // Carry the history over.
         let old = (&self.row_start, &self.partner, &self.history);
