@@ -238,6 +238,13 @@ impl Dim for D3 {
 #[inline(always)]
 pub fn keep_norm_in_plane<V: Linear>(t: V, n: V) -> V {
     let before = t.norm_squared();
+    keep_norm_in_plane_with(t, n, before, 1.0 / before)
+}
+
+/// [`keep_norm_in_plane`] given |t|² and its inverse, which depend on `t` only: the caller
+/// computes them before `n` is known, so the division overlaps the contact geometry.
+#[inline(always)]
+pub fn keep_norm_in_plane_with<V: Linear>(t: V, n: V, before: f64, inv_before: f64) -> V {
     if before == 0.0 {
         return t;
     }
@@ -245,7 +252,7 @@ pub fn keep_norm_in_plane<V: Linear>(t: V, n: V) -> V {
     let p = t - n * tn;
     // |p|² = |t|²(1 − x) with x = (t·n)²/|t|², which is of order (rotation per step)², so
     // 1/√(1−x) = 1 + x/2 + 3x²/8 + O(x³) is exact to rounding for x < 1e-5.
-    let x = tn * tn / before;
+    let x = tn * tn * inv_before;
     if x < 1e-5 {
         return p * (1.0 + x * (0.5 + 0.375 * x));
     }

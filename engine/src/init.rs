@@ -115,6 +115,11 @@ pub fn random_gas<D: Dim>(n: usize, d_min: f64, phi: f64, seed: u64) -> Result<G
             ));
         }
     }
+    // Label the grains along a Morton curve so that neighbours in space are near in memory
+    // (the force and gather passes then read partners from cache, most of all at large N).
+    let order = crate::neighbor::morton_order::<D>(&s);
+    let s = order.iter().map(|&k| s[k as usize]).collect();
+    let diameter = order.iter().map(|&k| diameter[k as usize]).collect();
     Ok(Gas { s, diameter, l })
 }
 

@@ -98,13 +98,13 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         let total: usize = ncell[..D::D].iter().product();
         // Counting sort of grains into cells.
         let mut head = vec![0u32; total + 1];
-        let cells: Vec<usize> = if brute {
+        let cells: Vec<u32> = if brute {
             vec![0; n]
         } else {
-            s.iter().map(cell_of).collect()
+            s.par_iter().map(|x| cell_of(x) as u32).collect()
         };
         for &c in &cells {
-            head[c + 1] += 1;
+            head[c as usize + 1] += 1;
         }
         for c in 0..total {
             head[c + 1] += head[c];
@@ -112,9 +112,11 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         let mut fill = head.clone();
         let mut order = vec![0u32; n];
         for (i, &c) in cells.iter().enumerate() {
+            let c = c as usize;
             order[fill[c] as usize] = i as u32;
             fill[c] += 1;
         }
+        drop(cells);
         let skin = self.skin;
         let listed = |i: usize, j: usize| -> bool {
             let mut ds = s[j] - s[i];
@@ -123,15 +125,16 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
             let cut = radius[i] + radius[j] + range + skin;
             r.norm_squared() < cut * cut
         };
-        let row_of = |i: usize| -> Vec<u32> {
-            let mut row = Vec::new();
+        // Appends row i (ascending partners) to `row`.
+        let row_of = |i: usize, row: &mut Vec<u32>| {
+            let first = row.len();
             if brute {
                 for j in i + 1..n {
                     if listed(i, j) {
                         row.push(j as u32);
                     }
                 }
-                return row;
+                return;
             }
             let mut ci = [0usize; 3];
             for a in 0..D::D {
@@ -162,16 +165,30 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
                     }
                 }
             }
-            row.sort_unstable();
-            row
+            row[first..].sort_unstable();
         };
-        let rows: Vec<Vec<u32>> = (0..n).into_par_iter().map(row_of).collect();
+        // Rows in fixed chunks, each chunk one buffer of partners and one of row ends (one
+        // allocation per chunk rather than per grain: less transient memory at large N).
+        let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(ROW_CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let rows = c * ROW_CHUNK..((c + 1) * ROW_CHUNK).min(n);
+                let mut ends = Vec::with_capacity(rows.len());
+                let mut part = Vec::new();
+                for i in rows {
+                    row_of(i, &mut part);
+                    ends.push(part.len() as u32);
+                }
+                (ends, part)
+            })
+            .collect();
         let mut row_start = Vec::with_capacity(n + 1);
         row_start.push(0u32);
-        let mut partner = Vec::with_capacity(rows.iter().map(|r| r.len()).sum());
-        for r in &rows {
-            partner.extend_from_slice(r);
-            row_start.push(partner.len() as u32);
+        let mut partner = Vec::with_capacity(chunks.iter().map(|c| c.1.len()).sum());
+        for (ends, part) in chunks {
+            let base = partner.len() as u32;
+            row_start.extend(ends.iter().map(|e| base + e));
+            partner.extend_from_slice(&part);
         }
         // Carry the history over.
         let old = (&self.row_start, &self.partner, &self.history);
@@ -215,6 +232,51 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         self.l_build = (0..D::D).map(|a| l[a]).collect();
         self.builds += 1;
     }
+}
+
+/// Spreads the low 21 bits of `x` to every third bit (3D Morton interleave).
+#[inline(always)]
+fn spread3(x: u64) -> u64 {
+    let mut x = x & 0x1f_ffff;
+    x = (x | x << 32) & 0x1f_0000_0000_ffff;
+    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    (x | x << 2) & 0x1249_2492_4924_9249
+}
+
+/// Spreads the low 32 bits of `x` to every second bit (2D Morton interleave).
+#[inline(always)]
+fn spread2(x: u64) -> u64 {
+    let mut x = x & 0xffff_ffff;
+    x = (x | x << 16) & 0x0000_ffff_0000_ffff;
+    x = (x | x << 8) & 0x00ff_00ff_00ff_00ff;
+    x = (x | x << 4) & 0x0f0f_0f0f_0f0f_0f0f;
+    x = (x | x << 2) & 0x3333_3333_3333_3333;
+    (x | x << 1) & 0x5555_5555_5555_5555
+}
+
+/// Indices of the reduced positions `s` (in [0,1)^d) in Morton (Z-curve) order; ties keep
+/// their input order, so the result is deterministic.
+pub fn morton_order<D: Dim>(s: &[D::V]) -> Vec<u32> {
+    let bits = if D::D == 3 { 21 } else { 32 };
+    let scale = (1u64 << bits) as f64;
+    let top = (1u64 << bits) - 1;
+    let key = |x: &D::V| -> u64 {
+        let q = |a: usize| ((x[a] * scale) as u64).min(top);
+        if D::D == 3 {
+            spread3(q(0)) | spread3(q(1)) << 1 | spread3(q(2)) << 2
+        } else {
+            spread2(q(0)) | spread2(q(1)) << 1
+        }
+    };
+    let mut keyed: Vec<(u64, u32)> = s
+        .iter()
+        .enumerate()
+        .map(|(i, x)| (key(x), i as u32))
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
 }
 
 /// Nearest periodic image of a reduced separation with components in (−1, 1).
@@ -281,6 +343,20 @@ mod tests {
             }
         }
         v
+    }
+
+    #[test]
+    fn morton_order_is_a_permutation_along_the_curve() {
+        let s = vec![
+            Vector2::new(0.9, 0.9),
+            Vector2::new(0.1, 0.1),
+            Vector2::new(0.9, 0.1),
+            Vector2::new(0.1, 0.9),
+        ];
+        assert_eq!(morton_order::<D2>(&s), vec![1, 2, 3, 0]);
+        let s3 = vec![Vector3::new(0.7, 0.2, 0.6), Vector3::new(0.2, 0.7, 0.1)];
+        assert_eq!(morton_order::<D3>(&s3), vec![1, 0]);
+        assert_eq!(spread3(0b111), 0b1001001);
     }
 
     #[test]

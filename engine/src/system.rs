@@ -49,6 +49,9 @@ pub struct System<D: Dim, L: ContactLaw<D>> {
     pub time: f64,
     pub step: u64,
     max_disp: f64,
+    /// Largest radius, at construction and at each list build (so the per-step staleness
+    /// check does not scan the radii).
+    r_max: f64,
 }
 
 /// One chunk of rows of the force pass, with its slices of the per-pair arrays.
@@ -59,6 +62,15 @@ struct Job<'a, H, V, A> {
     f: &'a mut [V],
     c: &'a mut [A],
     g: &'a mut [A],
+}
+
+/// Grain i of a pair, loaded once per row of the force pass.
+struct Grain<D: Dim> {
+    s: D::V,
+    u: D::V,
+    w: D::Ang,
+    r: f64,
+    m: f64,
 }
 
 /// Summary of one force pass over a chunk of rows.
@@ -107,7 +119,9 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             time: 0.0,
             step: 0,
             max_disp: 0.0,
+            r_max: 0.0,
         };
+        sys.r_max = sys.radius.iter().cloned().fold(0.0, f64::max);
         for x in sys.s.iter_mut() {
             wrap::<D>(x);
         }
@@ -124,11 +138,12 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
 
     /// Listing reach: largest 2R + interaction range + skin.
     fn reach(&self) -> f64 {
-        2.0 * self.radius.iter().cloned().fold(0.0, f64::max) + self.law.range() + self.nlist.skin
+        2.0 * self.r_max + self.law.range() + self.nlist.skin
     }
 
     /// Rebuilds the neighbour list now.
     pub fn rebuild(&mut self) {
+        self.r_max = self.radius.iter().cloned().fold(0.0, f64::max);
         let range = self.law.range();
         self.nlist
             .build::<D>(&self.s, &self.radius, &self.cell.l, range);
@@ -177,10 +192,31 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// One velocity-Verlet step: half kick, drift, forces, half kick (grains and cell).
     pub fn step(&mut self) {
         let dt = self.dt;
+        self.kick_drift();
+        // Cell: its rates were kicked at the end of the previous step (leapfrog); drift.
+        self.cell.drift(dt);
+        if self
+            .nlist
+            .stale::<D>(self.max_disp, &self.cell.l, self.reach())
+        {
+            self.rebuild();
+        }
+        self.compute_forces(dt);
+        self.accumulate(0.5 * dt);
+        let stress = self.stress();
+        self.cell.kick(&stress, dt);
+        self.time += dt;
+        self.step += 1;
+    }
+
+    /// Opening half kick and drift of the grains (AR07 (6): m s̈ = L⁻¹F, i.e.
+    /// u̇ = F/m + ε̇·u), with the forces of the last evaluation; updates the largest
+    /// displacement since the list build. The cell is not moved.
+    pub fn kick_drift(&mut self) {
+        let dt = self.dt;
         let h = 0.5 * dt;
         let erate = self.cell.strain_rate();
         let inv_l = D::div(ones::<D>(), self.cell.l);
-        // Half kick + drift of the grains (AR07 (6): m s̈ = L⁻¹F, i.e. u̇ = F/m + ε̇·u).
         let maxd = {
             let force = &self.force;
             let torque = &self.torque;
@@ -210,23 +246,9 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                     }
                     m
                 })
-                .collect::<Vec<f64>>()
+                .reduce(|| 0.0, f64::max)
         };
-        self.max_disp = maxd.into_iter().fold(0.0, f64::max).sqrt();
-        // Cell: its rates were kicked at the end of the previous step (leapfrog); drift.
-        self.cell.drift(dt);
-        if self
-            .nlist
-            .stale::<D>(self.max_disp, &self.cell.l, self.reach())
-        {
-            self.rebuild();
-        }
-        self.compute_forces(dt);
-        self.accumulate(h);
-        let stress = self.stress();
-        self.cell.kick(&stress, dt);
-        self.time += dt;
-        self.step += 1;
+        self.max_disp = maxd.sqrt();
     }
 
     /// Measured stress σ (AR07 (8)): (contact + kinetic virial)/Ω.
@@ -257,10 +279,39 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// `None` when the pair is out of the law's range (checked before any square root).
     #[inline(always)]
     fn pair(&self, i: usize, j: usize, erate: &D::V, range: f64) -> Option<(Pair<D>, D::V, f64)> {
-        let mut ds = self.s[j] - self.s[i];
+        let gi = self.grain(i);
+        self.pair_with(&gi, j, erate, range)
+    }
+
+    /// What the force pass reads of grain i, loaded once per row.
+    #[inline(always)]
+    fn grain(&self, i: usize) -> Grain<D> {
+        Grain {
+            s: self.s[i],
+            u: self.u[i],
+            w: if L::MOMENTS {
+                self.w[i]
+            } else {
+                D::Ang::zero()
+            },
+            r: self.radius[i],
+            m: self.mass[i],
+        }
+    }
+
+    /// [`Self::pair`] with grain i already loaded.
+    #[inline(always)]
+    fn pair_with(
+        &self,
+        gi: &Grain<D>,
+        j: usize,
+        erate: &D::V,
+        range: f64,
+    ) -> Option<(Pair<D>, D::V, f64)> {
+        let mut ds = self.s[j] - gi.s;
         min_image::<D>(&mut ds);
         let r = D::mul(ds, self.cell.l);
-        let ri = self.radius[i];
+        let ri = gi.r;
         let rj = self.radius[j];
         let d2 = r.norm_squared();
         let cut = ri + rj + range;
@@ -269,15 +320,15 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         }
         let d = d2.sqrt();
         let n = if d > 0.0 { r * (1.0 / d) } else { r };
-        let mut v = self.u[j] - self.u[i] + D::mul(*erate, r);
+        let mut v = self.u[j] - gi.u + D::mul(*erate, r);
         let (w_i, w_j) = if L::MOMENTS {
-            let (wi, wj) = (self.w[i], self.w[j]);
+            let (wi, wj) = (gi.w, self.w[j]);
             v -= D::ang_cross(wi * ri + wj * rj, n);
             (wi, wj)
         } else {
             (D::Ang::zero(), D::Ang::zero())
         };
-        let mi = self.mass[i];
+        let mi = gi.m;
         let mj = self.mass[j];
         // One division for both reduced quantities.
         let inv = 1.0 / ((ri + rj) * (mi + mj));
@@ -296,8 +347,10 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         ))
     }
 
-    /// Force pass over all listed pairs (parallel over fixed chunks of rows).
-    fn compute_forces(&mut self, dt: f64) {
+    /// Force pass over all listed pairs (parallel over fixed chunks of rows): per-pair forces,
+    /// contact virial and largest overlap; the springs advance by `dt` (0: evaluation only).
+    /// The net forces on the grains are summed by [`Self::accumulate`].
+    pub fn compute_forces(&mut self, dt: f64) {
         let n = self.len();
         let erate = self.cell.strain_rate();
         let range = self.law.range();
@@ -370,10 +423,11 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             overlap: (0.0, 0, 0),
         };
         for i in job.rows.clone() {
+            let gi = self.grain(i);
             for p in self.nlist.row(i) {
                 let j = self.nlist.partner[p] as usize;
                 let k = p - job.first;
-                let Some((pair, r, rmin)) = self.pair(i, j, erate, range) else {
+                let Some((pair, r, rmin)) = self.pair_with(&gi, j, erate, range) else {
                     job.hist[k] = Default::default();
                     job.f[k] = D::V::zero();
                     if L::MOMENTS {
@@ -403,8 +457,9 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         sum
     }
 
-    /// Gathers the pair forces on each grain in a fixed order, then the closing half kick.
-    fn accumulate(&mut self, h: f64) {
+    /// Gathers the pair forces on each grain in a fixed order, then the closing half kick
+    /// of length `h` (0: forces and kinetic virial only).
+    pub fn accumulate(&mut self, h: f64) {
         let erate = self.cell.strain_rate();
         let nl = &self.nlist;
         let pf = &self.pair_force;

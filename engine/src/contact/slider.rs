@@ -3,7 +3,7 @@
 //! (GRC07 (10)). Each kind is a type, so an absent feature has no state and no cost.
 
 use super::PairState;
-use crate::geometry::{keep_norm_in_plane, Dim, Linear};
+use crate::geometry::{keep_norm_in_plane_with, Dim, Linear};
 
 /// Sliding friction between grains.
 pub trait Friction: Copy + Send + Sync + std::fmt::Debug + 'static {
@@ -67,12 +67,16 @@ impl Friction for Frictionless {
 
 #[inline(always)]
 fn elastic_update<D: Dim>(st: &mut Spring<D::V>, n: D::V, pivot: f64, slip: D::V, kt: f64) {
-    let mut t = keep_norm_in_plane(st.t, n);
+    // The two divisions by stored quantities first: they do not wait for the geometry.
+    let before = st.t.norm_squared();
+    let inv_before = 1.0 / before;
+    let inv_kt = 1.0 / st.kt;
+    let mut t = keep_norm_in_plane_with(st.t, n, before, inv_before);
     t = D::pivot(t, n, pivot);
     // AR07 App. A: scaled down, never up, with the stiffness. Branch-free: whether K_T
     // rises or falls flips from step to step and would defeat the branch predictor. A new
     // spring has kt = 0 and t = 0, where the ratio is +∞ and the factor 1.
-    t = t * (kt / st.kt).min(1.0);
+    t = t * (kt * inv_kt).min(1.0);
     st.kt = kt;
     st.t = t - slip * kt;
 }

@@ -1,0 +1,69 @@
+//! Cost of the packing metrics on a 3D configuration of N = 4000 grains.
+//!
+//! ```text
+//! cargo bench -p grainbench-comparisons --bench metrics
+//! ```
+//!
+//! - `rattlers`: iterated rattler removal (AR07 §III.B) on the pairs closer than 0.02 a;
+//! - `pair_correlation`: g(r) up to r = 3 a, bins of 0.02 a (AR07 §III.D);
+//! - `gap_coordination`: z(h) on the default gap grid up to h = 0.1 a (AR07 §III.D).
+//!
+//! The configuration is the engine's random gas at Φ = 0.36 rescaled to Φ ≈ 0.6 (grains
+//! overlap; the metrics do not care), so the bench does not depend on a DEM run.
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use grainbench_comparisons::structure::default_gap_grid;
+use grainbench_comparisons::{find_rattlers, gap_coordination, pair_correlation, Rule};
+use grainbench_engine::geometry::D3;
+use grainbench_engine::init::random_gas;
+use std::hint::black_box;
+use std::time::Duration;
+
+fn metrics(c: &mut Criterion) {
+    let n = 4000;
+    let gas = random_gas::<D3>(n, 1.0, 0.36, 7).expect("random gas");
+    let shrink = (0.36f64 / 0.6).powf(1.0 / 3.0);
+    let lengths: Vec<f64> = (0..3).map(|a| gas.l[a] * shrink).collect();
+    let position: Vec<Vec<f64>> = gas
+        .s
+        .iter()
+        .map(|s| (0..3).map(|a| s[a] * lengths[a]).collect())
+        .collect();
+    let radius: Vec<f64> = gas.diameter.iter().map(|d| 0.5 * d).collect();
+    // Near pairs by brute force (setup, not timed).
+    let mut pairs = Vec::new();
+    for i in 0..n {
+        for j in i + 1..n {
+            let mut d2 = 0.0;
+            for a in 0..3 {
+                let mut x = position[j][a] - position[i][a];
+                x -= lengths[a] * (x / lengths[a]).round();
+                d2 += x * x;
+            }
+            let cut = radius[i] + radius[j] + 0.02;
+            if d2 < cut * cut {
+                pairs.push((i, j));
+            }
+        }
+    }
+    let grid = default_gap_grid(0.1);
+    let mut group = c.benchmark_group("metrics_3d");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(n as u64));
+    group.bench_function("rattlers", |b| {
+        b.iter(|| find_rattlers(n, black_box(&pairs), Rule::Frictional))
+    });
+    group.bench_function("pair_correlation", |b| {
+        b.iter(|| pair_correlation(&lengths, black_box(&position), 1.0, 0.02, 3.0))
+    });
+    group.bench_function("gap_coordination", |b| {
+        b.iter(|| gap_coordination(&lengths, black_box(&position), &radius, None, 1.0, &grid))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, metrics);
+criterion_main!(benches);
