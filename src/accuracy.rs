@@ -46,23 +46,48 @@ use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// Command-line arguments.
+#[derive(clap::Args, Debug)]
 pub struct Args {
+    /// Scene file or embedded scene name.
     pub scene: String,
+    /// Seeds, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
     pub seeds: Vec<u64>,
+    /// Knobs to sweep, comma-separated: dt, inertia, tolerance, kappa (default: all).
+    #[arg(long, value_delimiter = ',')]
     pub knobs: Vec<String>,
+    /// Codes: rust (all knobs), lammps (dt only). Default: rust.
+    #[arg(long, value_delimiter = ',')]
     pub codes: Vec<String>,
+    /// Output directory (default: `runs/accuracy/<scene>`).
+    #[arg(long, short)]
     pub out: Option<PathBuf>,
-    /// Values of each knob instead of the built-in lists.
+    /// dt_fraction values instead of 0.005,0.01,0.02,0.04,0.08,0.16,0.3,0.5,1.
+    #[arg(long, value_delimiter = ',')]
     pub dt: Vec<f64>,
+    /// Strain-rate caps I instead of 1e-3,3e-3,1e-2,3e-2,1e-1.
+    #[arg(long, value_delimiter = ',')]
     pub inertia: Vec<f64>,
+    /// Factors on the equilibrium criteria instead of 0.3,1,3,10.
+    #[arg(long, value_delimiter = ',')]
     pub tolerance: Vec<f64>,
+    /// κ values instead of 1e4,39000,181000 (Hertz) or 1e4,1e5 (linear).
+    #[arg(long, value_delimiter = ',')]
     pub kappa: Vec<f64>,
-    /// Cap on the time of every DEM stage (reduced units).
+    /// Cap on the time of every DEM stage, reduced units (short sweeps).
+    #[arg(long, value_name = "T")]
     pub max_time: Option<f64>,
     /// Wall-time limit of each external run, seconds.
+    #[arg(long, default_value_t = 3600.0, value_name = "SECS")]
     pub time_limit: f64,
-    /// Rerun points whose results are already in the output directory.
+    /// Rerun points already in the output directory.
+    #[arg(long)]
     pub fresh: bool,
+    /// Worker threads of our engine.
+    #[arg(long, short = 'j')]
+    pub threads: Option<usize>,
+    /// No progress lines.
+    #[arg(long, short)]
     pub quiet: bool,
 }
 

@@ -127,48 +127,7 @@ enum Command {
     /// and table wall time against the error of Φ, z*, x0 and P(f) (KS distance) relative to
     /// the tightest settings, with the Pareto front (accuracy.md/csv/json, plots). Time steps
     /// past stability are tabled as `unstable: <message>`.
-    Accuracy {
-        /// Scene file or embedded scene name.
-        scene: String,
-        /// Seeds, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
-        seeds: Vec<u64>,
-        /// Knobs to sweep, comma-separated: dt, inertia, tolerance, kappa (default: all).
-        #[arg(long, value_delimiter = ',')]
-        knobs: Vec<String>,
-        /// Codes: rust (all knobs), lammps (dt only). Default: rust.
-        #[arg(long, value_delimiter = ',')]
-        codes: Vec<String>,
-        /// Output directory (default: `runs/accuracy/<scene>`).
-        #[arg(long, short)]
-        out: Option<PathBuf>,
-        /// dt_fraction values instead of 0.005,0.01,0.02,0.04,0.08,0.16,0.3,0.5,1.
-        #[arg(long, value_delimiter = ',')]
-        dt: Vec<f64>,
-        /// Strain-rate caps I instead of 1e-3,3e-3,1e-2,3e-2,1e-1.
-        #[arg(long, value_delimiter = ',')]
-        inertia: Vec<f64>,
-        /// Factors on the equilibrium criteria instead of 0.3,1,3,10.
-        #[arg(long, value_delimiter = ',')]
-        tolerance: Vec<f64>,
-        /// κ values instead of 1e4,39000,181000 (Hertz) or 1e4,1e5 (linear).
-        #[arg(long, value_delimiter = ',')]
-        kappa: Vec<f64>,
-        /// Cap on the time of every DEM stage, reduced units (short sweeps).
-        #[arg(long, value_name = "T")]
-        max_time: Option<f64>,
-        /// Wall-time limit of each external run, seconds.
-        #[arg(long, default_value_t = 3600.0, value_name = "SECS")]
-        time_limit: f64,
-        /// Rerun points already in the output directory.
-        #[arg(long)]
-        fresh: bool,
-        /// Worker threads of our engine.
-        #[arg(long, short = 'j')]
-        threads: Option<usize>,
-        #[arg(long, short)]
-        quiet: bool,
-    },
+    Accuracy(accuracy::Args),
     /// Golden values: `grainbench golden update SCENE` records the last `compare` run of the
     /// scene as golden/<scene>/<code>.json (only when asked: nothing else writes them).
     Golden {
@@ -285,38 +244,9 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 all_metrics,
             })
         }
-        Command::Accuracy {
-            scene,
-            seeds,
-            knobs,
-            codes,
-            out,
-            dt,
-            inertia,
-            tolerance,
-            kappa,
-            max_time,
-            time_limit,
-            fresh,
-            threads,
-            quiet,
-        } => {
-            set_threads(threads)?;
-            accuracy::accuracy(&accuracy::Args {
-                scene,
-                seeds,
-                knobs,
-                codes,
-                out,
-                dt,
-                inertia,
-                tolerance,
-                kappa,
-                max_time,
-                time_limit,
-                fresh,
-                quiet,
-            })
+        Command::Accuracy(args) => {
+            set_threads(args.threads)?;
+            accuracy::accuracy(&args)
         }
         Command::Golden {
             action: GoldenAction::Update { scene, codes, from },
