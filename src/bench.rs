@@ -9,6 +9,8 @@ use crate::STOP;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::CodeResult;
 use grainbench_comparisons::decks::{lammps_table, Code, Deck, StageKind, Start, Tolerances};
+use grainbench_engine::geometry::{D2, D3};
+use grainbench_engine::run::initial_grains;
 use grainbench_engine::scene::{Criteria, Scene, Step};
 use grainbench_engine::snapshot::write_atomic;
 use serde::Serialize;
@@ -34,6 +36,10 @@ pub struct Args {
     /// equilibrium; rounded up to a multiple of the scene's check period.
     #[arg(long, value_name = "S")]
     pub steps: Option<u64>,
+    /// Start every code from the grains of this snapshot (e.g. a dense packing of the same
+    /// scene, `final.snap.json`) instead of the scene's start; the hard-grain prelude is skipped.
+    #[arg(long, value_name = "SNAP")]
+    pub start: Option<PathBuf>,
     /// Output directory (default: `runs/bench/<scene>`, `runs/bench/scale` with --scale).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
@@ -208,6 +214,37 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
     Ok((cut, start, steps))
 }
 
+/// The scene started from the grains of `snap` (at rest) without its hard-grain prelude.
+pub fn from_snapshot(scene: &Scene, snap: &Path) -> Result<Scene> {
+    if !snap.is_file() {
+        bail!(
+            "--start {}: no such snapshot file (give a final.snap.json written by `grainbench run` or `analyze --write`)",
+            snap.display()
+        );
+    }
+    let mut s = scene.clone();
+    s.initial.snapshot = Some(std::path::absolute(snap)?);
+    s.protocol = scene
+        .stages()
+        .into_iter()
+        .map(|(_, st)| st)
+        .skip_while(|st| !st.is_dem())
+        .collect();
+    if s.protocol.is_empty() {
+        bail!(
+            "scene {}: --start needs a DEM stage in [[protocol]]",
+            scene.name
+        );
+    }
+    // Read it now: a wrong file or grain count is an error before any run.
+    let read = match s.dimension {
+        2 => initial_grains::<D2>(&s).map(|_| ()),
+        _ => initial_grains::<D3>(&s).map(|_| ()),
+    };
+    read.map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
+    Ok(s)
+}
+
 /// One run of one code.
 #[derive(Clone, Debug, Serialize)]
 pub struct Run {
@@ -322,7 +359,10 @@ pub struct Report {
 type Setup = (Code, CodeResult, Option<(PathBuf, Deck)>);
 
 fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
-    let scene = crate::load_scene(spec)?;
+    let mut scene = crate::load_scene(spec)?;
+    if let Some(snap) = &a.start {
+        scene = from_snapshot(&scene, snap)?;
+    }
     let codes = if a.codes.is_empty() {
         Code::ALL.to_vec()
     } else {
@@ -500,7 +540,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
         repeat: a.repeat,
         threads: a.threads.clone(),
         command: std::env::args().collect::<Vec<_>>().join(" "),
-        notes: notes(&mode),
+        notes: notes(&mode, a.start.as_deref()),
         run_order: runs
             .iter()
             .map(|r| format!("{}/-j{}/#{}", r.code, r.threads, r.repeat))
@@ -520,7 +560,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
     Ok(if STOP.load(Ordering::SeqCst) { 130 } else { 0 })
 }
 
-fn notes(mode: &Mode) -> Vec<String> {
+fn notes(mode: &Mode, start: Option<&Path>) -> Vec<String> {
     let mut v = vec![
         format!("mode: {}", mode.describe()),
         "particle-steps/s = N × steps / wall; wall is the child process's, so it includes start-up, reading the start and writing the final state; `loop` is the time-stepping loop as each code logs it (LAMMPS/LIGGGHTS `Loop time`, YADE's script timer, our DEM stages)".into(),
@@ -529,9 +569,17 @@ fn notes(mode: &Mode) -> Vec<String> {
         "peak RSS: max of wait4 ru_maxrss of the child (its own, or its largest descendant, e.g. one MPI rank) and the sum over its process group sampled every 0.25 s".into(),
         "threads: rust -j T; LAMMPS/LIGGGHTS run directly for T = 1, under mpirun -np T otherwise; YADE -j T".into(),
     ];
+    if let Some(snap) = start {
+        v.push(format!(
+            "start: the grains of {} at rest, in every code (hard-grain prelude skipped)",
+            snap.display()
+        ));
+    }
     if let Mode::Steps { .. } = mode {
         v.push("fixed steps: the run is the scene's first DEM stage only, with equilibrium criteria set to 1e-200 so that no code stops early; the checks still run every check period, as in a real run".into());
-        v.push("fixed steps start from the scene's start, often a gas: the rates are those of that state, not of a dense packing (the equilibrium mode and `--scale` time dense ones)".into());
+        if start.is_none() {
+            v.push("fixed steps start from the scene's start, often a gas: the rates are those of that state, not of a dense packing (`--start SNAP`, the equilibrium mode and `--scale` time dense ones)".into());
+        }
     }
     v
 }

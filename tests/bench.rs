@@ -314,3 +314,72 @@ fn time_limit_stops_a_run_and_says_so() {
         .unwrap()
         .contains("--time-limit"));
 }
+
+/// Packing fraction of a snapshot, through `grainbench analyze --json`.
+fn phi_of(snap: &Path) -> f64 {
+    let out = Command::cargo_bin("grainbench")
+        .unwrap()
+        .args(["analyze", "--json"])
+        .arg(snap)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "analyze {}", snap.display());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    v["packing_fraction"].as_f64().unwrap()
+}
+
+/// `--start SNAP`: every code starts from the dense packing of the snapshot (Φ ≈ 0.592), not
+/// from the scene's melted FCC gas (Φ = 0.45), and keeps it over the timed steps.
+#[test]
+fn start_snapshot_is_the_start_of_every_code() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let snap = root.join("reference-inputs/starts/ar07-D-10kPa-n1372.snap.json");
+    let phi0 = phi_of(&snap);
+    let lammps = grainbench_comparisons::decks::Code::Lammps.find().is_some();
+    let codes = if lammps { "rust,lammps" } else { "rust" };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b");
+    Command::cargo_bin("grainbench")
+        .unwrap()
+        .args(["bench", "ar07-D-10kPa-n1372", "--codes", codes])
+        .args(["--steps", "200", "--repeat", "1", "-q", "--start"])
+        .arg(&snap)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success();
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    assert!(md.contains("start: the grains of"), "{md}");
+    for code in codes.split(',') {
+        let phi = phi_of(&out.join(format!("runs/{code}-j1-1/final.snap.json")));
+        assert!((phi - phi0).abs() < 2e-3, "{code}: Φ = {phi}, start {phi0}");
+    }
+}
+
+/// A start snapshot with another grain count is refused before any run, naming the field.
+#[test]
+fn start_snapshot_of_another_size_is_an_error() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let snap = root.join("reference-inputs/starts/ar07-D-10kPa-n1372.snap.json");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b");
+    let assert = Command::cargo_bin("grainbench")
+        .unwrap()
+        .args([
+            "bench",
+            "xcode-smoke",
+            "--codes",
+            "rust",
+            "--steps",
+            "200",
+            "--start",
+        ])
+        .arg(&snap)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .failure();
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr);
+    assert!(stderr.contains("particles.count"), "{stderr}");
+    assert!(!out.join("bench.json").exists());
+}

@@ -305,6 +305,9 @@ pub fn run_scene(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunErr
 /// The initial grains of a scene: random gas (GRC07 §III.A) or FCC lattice (AR07 §III).
 pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
     let n = scene.particles.count;
+    if let Some(path) = &scene.initial.snapshot {
+        return snapshot_grains(path, n);
+    }
     let (l, s, diameter) = match scene.initial.arrangement {
         Arrangement::Random => {
             let gas = random_gas::<D>(
@@ -337,6 +340,44 @@ pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
         s,
         u,
         diameter,
+        time: 0.0,
+        step: 0,
+    })
+}
+
+/// The grains of a snapshot file, at rest (`initial.snapshot`).
+fn snapshot_grains<D: Dim>(path: &std::path::Path, n: usize) -> Result<Grains<D>, String> {
+    let snap = Snapshot::read(path).map_err(|e| format!("initial.snapshot: {e}"))?;
+    let p = &snap.particles;
+    if snap.dimension != D::D || p.radius.len() != n {
+        return Err(format!(
+            "initial.snapshot {}: holds {} grains in {}D, the scene wants {n} in {}D (particles.count, dimension)",
+            path.display(),
+            p.radius.len(),
+            snap.dimension,
+            D::D
+        ));
+    }
+    let mut l = D::V::zero();
+    for a in 0..D::D {
+        l[a] = snap.cell.lengths[a];
+    }
+    let s = p
+        .position
+        .iter()
+        .map(|r| {
+            let mut x = D::V::zero();
+            for a in 0..D::D {
+                x[a] = (r[a] / l[a]).rem_euclid(1.0);
+            }
+            x
+        })
+        .collect();
+    Ok(Grains {
+        l,
+        s,
+        u: vec![D::V::zero(); n],
+        diameter: p.radius.iter().map(|r| 2.0 * r).collect(),
         time: 0.0,
         step: 0,
     })

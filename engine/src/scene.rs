@@ -203,6 +203,11 @@ pub struct Initial {
     /// Root-mean-square speed of Maxwell velocities (reduced units); 0 = grains at rest.
     #[serde(default)]
     pub rms_velocity: f64,
+    /// Start instead from the grains of this snapshot (positions, diameters, cell lengths),
+    /// at rest; `particles.count` and `dimension` must match it. Used by `grainbench bench
+    /// --start` to time every code on the same dense packing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub snapshot: Option<PathBuf>,
 }
 
 /// Numerical settings; the defaults suit the papers' scenes.
