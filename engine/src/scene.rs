@@ -204,7 +204,8 @@ pub struct Initial {
     #[serde(default)]
     pub rms_velocity: f64,
     /// Start instead from the grains of this snapshot (positions, diameters, cell lengths),
-    /// at rest; `particles.count` and `dimension` must match it. Used by `grainbench bench
+    /// at rest; `particles.count` and `dimension` must match it; a relative path is taken from
+    /// the working directory (as LAMMPS `read_data`). Used by `grainbench bench
     /// --start` to time every code on the same dense packing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub snapshot: Option<PathBuf>,
