@@ -406,11 +406,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
         "bench {} (N = {n}), {}: {} × threads {:?} × {} repeat(s) → {}",
         scene.name,
         mode.describe(),
-        codes
-            .iter()
-            .map(|c| c.name())
-            .collect::<Vec<_>>()
-            .join(", "),
+        crate::xcode::code_names(&codes),
         a.threads,
         a.repeat,
         out.display()

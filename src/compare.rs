@@ -56,11 +56,7 @@ pub fn compare(a: &Args) -> Result<i32> {
         "compare {} (N = {}): {} → {}",
         scene.name,
         start.n(),
-        codes
-            .iter()
-            .map(|c| c.name())
-            .collect::<Vec<_>>()
-            .join(", "),
+        crate::xcode::code_names(&codes),
         out.display()
     );
     let mut results = Vec::new();

@@ -15,16 +15,13 @@ use grainbench_comparisons::plots::{line_plot, Axis, LinePlot, Marks, Series};
 use grainbench_engine::cell::{Cell, Control};
 use grainbench_engine::contact::slider::Coulomb;
 use grainbench_engine::geometry::{Dim, Linear as _, D3};
-use grainbench_engine::run::{
-    build_system, cell_mass, hertz_mindlin_law, run_protocol, time_step, Progress, RunOptions,
-};
+use grainbench_engine::run::{cell_mass, compress_until, hertz_mindlin_law, time_step};
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;
 use grainbench_engine::system::System;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::process::Command;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Steps timed per size unless `--steps` says otherwise.
@@ -74,9 +71,9 @@ pub fn tiling(n: usize) -> (usize, usize) {
     )
 }
 
-/// Gas at Φ = 0.3 compressed at P = 1 with a large strain-rate cap (0.1) until Φ ≥ 0.58:
-/// a dense random packing (as `engine/benches/common/packings.rs` prepares for the step
-/// benchmark), its reduced positions and cell lengths.
+/// Gas at Φ = 0.3 compressed at P = 1 with a large strain-rate cap (0.1) until Φ ≥ 0.58
+/// (`run::compress_until`, as the step benchmark prepares its packings): a dense random
+/// packing, its reduced positions and cell lengths.
 fn random_packing(n: usize) -> Result<(Vec<<D3 as Dim>::V>, <D3 as Dim>::V)> {
     let text = format!(
         "name = \"scale-base\"\ndimension = 3\nseed = 7\n[particles]\ncount = {n}\n\
@@ -87,19 +84,7 @@ fn random_packing(n: usize) -> Result<(Vec<<D3 as Dim>::V>, <D3 as Dim>::V)> {
     let scene = Scene::from_toml(&text, Path::new("scale-base.toml"))
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let law = hertz_mindlin_law(&scene.law, Coulomb { mu: 0.3 });
-    let mut sys = build_system::<D3, _>(&scene, law).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let stop = AtomicBool::new(false);
-    let mut progress = |p: &Progress| {
-        if p.checks.packing_fraction >= 0.58 {
-            stop.store(true, Ordering::Relaxed);
-        }
-    };
-    let mut opts = RunOptions {
-        progress: Some(&mut progress),
-        stop: Some(&stop),
-        ..Default::default()
-    };
-    run_protocol(&scene, &mut sys, &mut opts).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let sys = compress_until::<D3, _>(&scene, law, 0.58).map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok((sys.s.clone(), sys.cell.l))
 }
 

@@ -29,6 +29,15 @@ pub fn parse_codes(list: &[String], allow_rust: bool) -> Result<Vec<Code>> {
     Ok(out)
 }
 
+/// "rust, lammps, …" for progress lines.
+pub fn code_names(codes: &[Code]) -> String {
+    codes
+        .iter()
+        .map(|c| c.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Writes one deck's files into `dir` (removing a refusal left there by an earlier matrix).
 pub fn write_deck(deck: &Deck, dir: &Path) -> Result<()> {
     let _ = std::fs::remove_file(dir.join(REFUSED));

@@ -805,6 +805,34 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
     Ok((snap, stopped))
 }
 
+/// A system of `scene` with `law`, run through its protocol until the packing fraction
+/// reaches `phi_stop` at a check (or the protocol ends): the fast-compressed dense packings of
+/// the step benchmarks and `grainbench bench --scale`.
+pub fn compress_until<D: Dim, L: ContactLaw<D>>(
+    scene: &Scene,
+    law: L,
+    phi_stop: f64,
+) -> Result<System<D, L>, RunError> {
+    let mut sys = build_system::<D, L>(scene, law).map_err(|message| RunError::Setup {
+        scene: scene.name.clone(),
+        message,
+    })?;
+    let stop = AtomicBool::new(false);
+    let mut progress = |p: &Progress| {
+        if p.checks.packing_fraction >= phi_stop {
+            stop.store(true, Ordering::Relaxed);
+        }
+    };
+    let mut opts = RunOptions {
+        progress: Some(&mut progress),
+        stop: Some(&stop),
+        ..Default::default()
+    };
+    // On a pool worker, as `run_scene` does.
+    rayon::scope(|_| run_protocol(scene, &mut sys, &mut opts))?;
+    Ok(sys)
+}
+
 /// Runs every DEM stage of `scene` on a prepared system (all with the system's law): the
 /// benches' preparation route.
 pub fn run_protocol<D: Dim, L: ContactLaw<D>>(

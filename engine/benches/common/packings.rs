@@ -7,13 +7,11 @@ use grainbench_engine::contact::slider::{Coulomb, RollingSpring};
 use grainbench_engine::contact::ContactLaw;
 use grainbench_engine::geometry::Dim;
 use grainbench_engine::run::{
-    adhesion, build_system, hertz_mindlin_law, linear_law, rolling_spring, run_protocol, Progress,
-    RunOptions,
+    adhesion, compress_until, hertz_mindlin_law, linear_law, rolling_spring,
 };
 use grainbench_engine::scene::{Law, Scene};
 use grainbench_engine::system::System;
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// 3D Hertz–Mindlin scene: gas at Φ = 0.36 compressed at P = 1, inertia cap 0.1.
@@ -115,20 +113,7 @@ pub fn report<D: Dim, L: ContactLaw<D>>(what: &str, sys: &System<D, L>) {
 /// jamming density, would lose most of its contacts within a few hundred steps.
 pub fn prepare<D: Dim, L: ContactLaw<D>>(scene: &Scene, law: L, phi_stop: f64) -> System<D, L> {
     let start = Instant::now();
-    let mut sys = build_system::<D, L>(scene, law).expect("build_system");
-    let stop = AtomicBool::new(false);
-    let mut progress = |p: &Progress| {
-        if p.checks.packing_fraction >= phi_stop {
-            stop.store(true, Ordering::Relaxed);
-        }
-    };
-    let mut opts = RunOptions {
-        progress: Some(&mut progress),
-        stop: Some(&stop),
-        ..Default::default()
-    };
-    // On a pool worker, as `run_scene` does.
-    rayon::scope(|_| run_protocol(scene, &mut sys, &mut opts)).expect("preparation run");
+    let sys = compress_until::<D, L>(scene, law, phi_stop).expect("preparation run");
     report(
         &format!(
             "prepared {} in {} steps, {:.1} s",
