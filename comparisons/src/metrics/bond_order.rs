@@ -14,7 +14,7 @@
 //! Real spherical harmonics are used: they are a unitary recombination of the complex
 //! `Y_lm` at each l, so every sum `Σ_m q_lm(i) q*_lm(j)` is unchanged.
 
-use crate::neighbors::{for_each_pair, points, valid_cell, Point};
+use super::neighbors::{for_each_pair, points, valid_cell, Point};
 use serde::Serialize;
 use std::f64::consts::PI;
 
@@ -315,7 +315,7 @@ pub fn bond_order(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixtures::Lcg;
+    use crate::metrics::fixtures::Lcg;
 
     fn legendre(l: usize, x: f64) -> f64 {
         legendre_assoc(l, 0, x)
@@ -519,8 +519,8 @@ mod tests {
             let pts = points(3, &p);
             let mut v = Vec::new();
             for h in 0..n {
-                let r = crate::neighbors::separation(&l, &pts[g], &pts[h]);
-                let s = crate::neighbors::norm2(&r).sqrt();
+                let r = crate::metrics::neighbors::separation(&l, &pts[g], &pts[h]);
+                let s = crate::metrics::neighbors::norm2(&r).sqrt();
                 if h != g && s < DEFAULT_CUTOFF {
                     v.push([r[0] / s, r[1] / s, r[2] / s]);
                 }

@@ -25,8 +25,8 @@
 //! variant I (which keeps the distant attractions of cohesive packings). With this,
 //! z^II(0) ≈ z + 6x0 − 2N_rr/n (AR07 (36)) when each rattler rests on 3 contacts.
 
-use crate::metrics::X_K_MIN_LEN;
-use crate::neighbors::{for_each_pair, norm2, points, separation, valid_cell, CellGrid, Point};
+use super::neighbors::{for_each_pair, norm2, points, separation, valid_cell, CellGrid, Point};
+use super::rattlers::contact_number_fractions;
 use serde::Serialize;
 use std::collections::HashSet;
 
@@ -86,7 +86,7 @@ pub struct Relaxed {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FixedRattlers {
     /// x_k^II, k = 0, 1, …: fraction of all grains with k geometric contacts (AR07 T.I, T.V,
-    /// II). At least [`X_K_MIN_LEN`] entries.
+    /// II). At least [`X_K_MIN_LEN`](super::rattlers::X_K_MIN_LEN) entries.
     pub x_k: Vec<f64>,
     /// z^II(0) = 2 × contacts / n, the geometric coordination number.
     pub z_geometric: f64,
@@ -350,12 +350,7 @@ pub fn fix_rattlers(
     let dirs: Vec<[f64; 3]> = (0..n).map(|g| random_direction(d, seed, g)).collect();
     let relaxed = relax_rattlers(lengths, position, radius, is_rattler, &dirs, 100_000)?;
     let (k, pairs) = geometric_contacts(lengths, &relaxed.position, radius, counted);
-    let kmax = k.iter().copied().max().unwrap_or(0);
-    let mut x_k = vec![0.0; X_K_MIN_LEN.max(kmax + 1)];
-    for &kg in &k {
-        x_k[kg] += 1.0;
-    }
-    x_k.iter_mut().for_each(|x| *x /= n as f64);
+    let x_k = contact_number_fractions(&k);
     let rat = |g: usize| is_rattler[g];
     let summary = FixedRattlers {
         x_k,
@@ -373,7 +368,7 @@ pub fn fix_rattlers(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixtures::{lattice, Lcg};
+    use crate::metrics::fixtures::{lattice, Lcg};
 
     /// Solves `A λ = b` (d × d, columns `cols`) by Gaussian elimination with pivoting.
     fn solve(cols: &[[f64; 3]], b: [f64; 3], d: usize) -> Vec<f64> {

@@ -7,7 +7,8 @@
 //! force-carrying contacts between backbone grains; every interaction in cohesive packings),
 //! so that `z⟨N⟩` enters the pressure relation AR07 (22) consistently.
 
-use crate::series::Histogram;
+use super::math::{mean, norm};
+use super::series::Histogram;
 use grainbench_engine::snapshot::Contact;
 use serde::Serialize;
 
@@ -54,15 +55,6 @@ pub struct PopulationStats {
     /// M1^(k), M2^(k): mean |T|/N over the population with N > ⟨N⟩, resp. 0 < N < ⟨N⟩.
     pub m1: Option<f64>,
     pub m2: Option<f64>,
-}
-
-fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
-    let (s, k) = xs.fold((0.0, 0usize), |(s, k), x| (s + x, k + 1));
-    (k > 0).then(|| s / k as f64)
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 /// `|T|/N` (M1, M2 of AR07 T.VI).
@@ -159,7 +151,7 @@ pub fn force_angle_histogram(contacts: &[&Contact], bin_width_deg: f64) -> Optio
     let angles: Vec<f64> = contacts.iter().filter_map(|c| force_angle(c)).collect();
     let bins = (180.0 / bin_width_deg)
         .ceil()
-        .clamp(1.0, crate::series::MAX_BINS as f64) as usize;
+        .clamp(1.0, super::series::MAX_BINS as f64) as usize;
     Histogram::density(&angles, 0.0, 180.0 / bins as f64, bins)
 }
 

@@ -214,7 +214,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixtures::Lcg;
+    use crate::metrics::fixtures::Lcg;
 
     fn brute(lengths: &[f64], pts: &[Point], cutoff: f64) -> Vec<(usize, usize)> {
         let mut v = Vec::new();

@@ -103,6 +103,24 @@ impl Rattlers {
     }
 }
 
+/// Largest contact number given its own `x_k` entry at least (more are added if present).
+pub const X_K_MIN_LEN: usize = 13;
+
+/// x_k, k = 0, 1, …: the fraction of the grains with k contacts, given each grain's contact
+/// number (AR07 T.I, T.V); at least [`X_K_MIN_LEN`] entries, all 0 without grains.
+pub fn contact_number_fractions(k_of: &[usize]) -> Vec<f64> {
+    let n = k_of.len();
+    let kmax = k_of.iter().copied().max().unwrap_or(0);
+    let mut x_k = vec![0.0; X_K_MIN_LEN.max(kmax + 1)];
+    for &k in k_of {
+        x_k[k] += 1.0;
+    }
+    if n > 0 {
+        x_k.iter_mut().for_each(|x| *x /= n as f64);
+    }
+    x_k
+}
+
 /// Iterated rattler removal (AR07 §III.B) on `n` grains joined by the force-carrying
 /// contacts `pairs` (grain indices `i`, `j`; each pair is one contact).
 ///

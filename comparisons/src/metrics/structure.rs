@@ -6,11 +6,11 @@
 //! r/a, z of the surface gap h/a with `h_ij = |r_ij| − R_i − R_j` (negative: overlap).
 //!
 //! Rattlers (AR07 §III.C): z(h) comes in three variants, I (all grains where the snapshot
-//! has them), II (rattlers first fixed onto the backbone, [`crate::fixed_rattlers`]) and III
+//! has them), II (rattlers first fixed onto the backbone, [`super::fixed_rattlers`]) and III
 //! (rattlers discarded: only backbone grains and pairs, so that z^III(0) = z*).
 
-use crate::neighbors::{for_each_pair, points, valid_cell};
-use crate::series::Series;
+use super::neighbors::{for_each_pair, points, valid_cell};
+use super::series::Series;
 use serde::Serialize;
 use std::f64::consts::PI;
 
@@ -170,7 +170,7 @@ pub fn gap_coordination(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixtures::{lattice, Lcg};
+    use crate::metrics::fixtures::{lattice, Lcg};
 
     fn close(a: f64, b: f64, tol: f64) -> bool {
         (a - b).abs() <= tol * b.abs().max(1.0)
