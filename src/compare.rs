@@ -5,10 +5,11 @@
 
 use crate::{run, RunFlags, STOP};
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::crosscode::{self, Bands, CodeResult, Comparison};
-use grainbench_comparisons::decks::{self, Code, StageKind, Start};
-use grainbench_comparisons::import::{self, Meta};
 use grainbench_comparisons::metrics::Analysis;
+use grainbench_comparisons::xcode::crosscode::{self, Bands, CodeResult, Comparison};
+use grainbench_comparisons::xcode::decks::{self, StageKind, Start};
+use grainbench_comparisons::xcode::import::{self, Meta};
+use grainbench_comparisons::xcode::Code;
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};

@@ -651,7 +651,7 @@ fn analysis_of(snap: &Snapshot) -> grainbench_comparisons::metrics::Analysis {
 }
 
 fn analyze(path: &Path, json: bool, from: Option<&str>, write: Option<&Path>) -> Result<i32> {
-    use grainbench_comparisons::{decks::Code, import};
+    use grainbench_comparisons::xcode::{import, Code};
     let snap = match from {
         None => Snapshot::read(path)?,
         Some(name) => {

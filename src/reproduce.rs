@@ -5,7 +5,7 @@
 use crate::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::metrics::{analyze, Analysis};
-use grainbench_comparisons::{paper, plots, reproduction};
+use grainbench_comparisons::report::{paper, plots, reproduction};
 use grainbench_engine::{library, snapshot, Snapshot};
 use std::path::{Path, PathBuf};
 

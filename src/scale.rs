@@ -11,7 +11,7 @@
 use crate::bench::{Args, Stat};
 use crate::compare;
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::plots::{line_plot, Axis, LinePlot, Marks, Series};
+use grainbench_comparisons::report::plots::{line_plot, Axis, LinePlot, Marks, Series};
 use grainbench_engine::cell::{Cell, Control};
 use grainbench_engine::contact::slider::Coulomb;
 use grainbench_engine::geometry::{Dim, Linear as _, D3};

@@ -1,7 +1,8 @@
 //! `grainbench decks`, `capabilities`: the cross-code decks of a scene.
 
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::decks::{self, capability, Code, Deck, Start};
+use grainbench_comparisons::xcode::decks::{self, capability, Deck, Start};
+use grainbench_comparisons::xcode::Code;
 use grainbench_engine::snapshot::write_atomic;
 use std::path::{Path, PathBuf};
 

@@ -159,7 +159,7 @@ fn bad_output_directory_writes_nothing() {
 
 #[test]
 fn runs_alternate_between_codes() {
-    if grainbench_comparisons::decks::Code::Lammps.find().is_none() {
+    if grainbench_comparisons::xcode::Code::Lammps.find().is_none() {
         eprintln!("skipped: `lmp` not installed");
         return;
     }
@@ -236,7 +236,7 @@ fn scale_sweep_writes_table_and_plot() {
 /// fixed steps, marked approximate.
 #[test]
 fn adhesive_scene_runs_the_bench_only_lammps_deck() {
-    if grainbench_comparisons::decks::Code::Lammps.find().is_none() {
+    if grainbench_comparisons::xcode::Code::Lammps.find().is_none() {
         eprintln!("skipped: `lmp` not installed");
         return;
     }
@@ -335,7 +335,7 @@ fn start_snapshot_is_the_start_of_every_code() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let snap = root.join("reference-inputs/starts/ar07-D-10kPa-n1372.snap.json");
     let phi0 = phi_of(&snap);
-    let lammps = grainbench_comparisons::decks::Code::Lammps.find().is_some();
+    let lammps = grainbench_comparisons::xcode::Code::Lammps.find().is_some();
     let codes = if lammps { "rust,lammps" } else { "rust" };
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("b");

@@ -4,7 +4,8 @@
 //! `git diff reference-inputs/`, commit. (Data files are generated, not committed; their
 //! checksums are in each `deck.json`.)
 
-use grainbench_comparisons::decks::{self, Code, Start};
+use grainbench_comparisons::xcode::decks::{self, Start};
+use grainbench_comparisons::xcode::Code;
 use grainbench_engine::{library, Scene};
 use std::path::Path;
 
@@ -88,7 +89,7 @@ fn capability_doc_matches_the_matrix() {
     let doc = std::fs::read_to_string(&path).unwrap();
     assert_eq!(
         doc,
-        grainbench_comparisons::decks::capability::markdown(),
+        grainbench_comparisons::xcode::decks::capability::markdown(),
         "{} is stale: run `cargo run --release -- capabilities > docs/capabilities.md`",
         path.display()
     );

@@ -9,7 +9,7 @@
 //! where `ci/install-externals.sh` must have installed all three.
 
 use assert_cmd::Command;
-use grainbench_comparisons::crosscode::{Bands, Comparison};
+use grainbench_comparisons::xcode::crosscode::{Bands, Comparison};
 
 #[test]
 fn smoke_scene_agrees_across_codes() {

@@ -2,7 +2,7 @@
 //! through the `reproduce` command that makes the paper-size tables.
 
 use assert_cmd::Command;
-use grainbench_comparisons::paper::paper_values;
+use grainbench_comparisons::report::paper::paper_values;
 use serde_json::Value;
 
 const BANDS: &str = include_str!("../golden/ci-bands.toml");

@@ -12,7 +12,7 @@
 //! overlap; the metrics do not care), so the bench does not depend on a DEM run.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use grainbench_comparisons::structure::default_gap_grid;
+use grainbench_comparisons::metrics::structure::default_gap_grid;
 use grainbench_comparisons::{find_rattlers, gap_coordination, pair_correlation, Rule};
 use grainbench_engine::geometry::D3;
 use grainbench_engine::init::random_gas;

@@ -5,8 +5,9 @@
 mod common;
 use common::rel;
 
-use grainbench_comparisons::decks::{self, Code, Stage, StageKind, Start, Tolerances};
-use grainbench_comparisons::import::{self, last_dump_frame, Meta};
+use grainbench_comparisons::xcode::decks::{self, Stage, StageKind, Start, Tolerances};
+use grainbench_comparisons::xcode::import::{self, last_dump_frame, Meta};
+use grainbench_comparisons::xcode::Code;
 use grainbench_engine::contact::hertz_mindlin::HertzMindlin;
 use grainbench_engine::scene::{Mu, Scene};
 use std::path::Path;

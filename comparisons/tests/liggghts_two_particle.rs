@@ -10,8 +10,9 @@
 mod common;
 use common::rel;
 
-use grainbench_comparisons::decks::{self, liggghts, Code, Stage, StageKind, Start, Tolerances};
-use grainbench_comparisons::import::{self, Meta};
+use grainbench_comparisons::xcode::decks::{self, liggghts, Stage, StageKind, Start, Tolerances};
+use grainbench_comparisons::xcode::import::{self, Meta};
+use grainbench_comparisons::xcode::Code;
 use grainbench_engine::scene::{Mu, Scene};
 use std::path::Path;
 use std::process::Command;

@@ -12,8 +12,9 @@
 
 mod common;
 
-use grainbench_comparisons::decks::{self, Code, Stage, StageKind, Start, Tolerances};
-use grainbench_comparisons::import::{self, Meta};
+use grainbench_comparisons::xcode::decks::{self, Stage, StageKind, Start, Tolerances};
+use grainbench_comparisons::xcode::import::{self, Meta};
+use grainbench_comparisons::xcode::Code;
 use grainbench_engine::scene::{Mu, Scene};
 use std::path::Path;
 use std::process::Command;

@@ -7,7 +7,7 @@
 //! [`METRIC_KEYS`].
 //!
 //! ```
-//! use grainbench_comparisons::paper::paper_values;
+//! use grainbench_comparisons::report::paper::paper_values;
 //! let d = paper_values("ar07-D").unwrap();
 //! let phi = &d.values["phi"];
 //! assert_eq!((phi.value, phi.sd), (0.5923, Some(0.0006)));
@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
 /// The embedded data file.
-pub const PAPER_VALUES_TOML: &str = include_str!("../../golden/paper-values.toml");
+pub const PAPER_VALUES_TOML: &str = include_str!("../../../golden/paper-values.toml");
 
 /// One published value.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

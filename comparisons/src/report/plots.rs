@@ -13,7 +13,7 @@
 //! * [`line_plot`]: any set of series, e.g. z(h) (AR07 Figs. 6, 9), with linear or log axes.
 //!
 //! ```no_run
-//! use grainbench_comparisons::plots::{force_distribution, Series};
+//! use grainbench_comparisons::report::plots::{force_distribution, Series};
 //! let hist = vec![(0.1, 0.55), (0.3, 0.80), (0.5, 0.85), (1.0, 0.60), (2.0, 0.20)];
 //! let files = force_distribution(
 //!     std::path::Path::new("out/pf-state-A"),
@@ -33,7 +33,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// DejaVu Sans (Bitstream Vera licence, see `comparisons/assets/LICENSE-DejaVu.txt`).
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 /// The family name the embedded font is registered under.
 const FONT_FAMILY: &str = "sans-serif";
 
@@ -55,7 +55,7 @@ const PALETTE: [RGBColor; 10] = [
 ];
 
 /// The fit of the distribution of normalized normal forces f = N/⟨N⟩ proposed by Donev,
-/// Torquato & Stillinger (DTS, PRE 71, 011105 (2005), AR07 ref. [53]) for rigid frictionless
+/// Torquato & Stillinger (DTS, PRE 71, 011105 (2005), AR07 ref. \[53\]) for rigid frictionless
 /// sphere packings, as AR07 quotes it in the caption of Fig. 4:
 ///
 /// P(f) = (3.43 f² + 1.45 − 1.18 / (1 + 4.71 f)) · exp(−2.25 f).

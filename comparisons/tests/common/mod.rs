@@ -1,6 +1,6 @@
 //! Shared by the two-particle deck tests.
 
-use grainbench_comparisons::decks::Code;
+use grainbench_comparisons::xcode::Code;
 
 /// Is `code` installed? Missing: a skip notice, or a failure when `CI` is set (CI installs
 /// all three with ci/install-externals.sh).

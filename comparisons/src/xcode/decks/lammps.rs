@@ -3,7 +3,7 @@
 //! Files: `in.lammps` (input script) and `data.lammps` (atoms, `atom_style sphere`). Run as
 //! `lmp -in in.lammps -log log.lammps -screen none`-like with the deck directory as cwd. The
 //! run leaves `final.atoms` (`dump custom`), `final.contacts` (`dump local`) and `final.status`
-//! (`equilibrium` or `time-limit`), read back by [`crate::import::lammps`] (columns documented
+//! (`equilibrium` or `time-limit`), read back by [`crate::xcode::import::lammps`] (columns documented
 //! in `docs/external-formats/lammps.md`).
 //!
 //! Law (reduced units, `units lj`):

@@ -8,7 +8,7 @@
 //! * [`capability`]: the capability matrix, one [`Support`] per [`Feature`] and [`Code`].
 //! * [`lammps`], [`liggghts`], [`yade`]: one generator per code (one style, one file).
 //! * [`lammps_table`]: a bench-only (throughput) LAMMPS deck for adhesive scenes.
-//! * [`decks_for`]: every deck of a scene, refusing unsupported features with what is missing.
+//! * [`deck`]: the deck of a scene for one code, refusing unsupported features with what is missing.
 
 pub mod capability;
 pub mod lammps;
@@ -16,6 +16,8 @@ pub mod lammps_table;
 pub mod liggghts;
 pub mod yade;
 
+/// Every deck is for one code.
+pub use super::code::{which, Code};
 pub use capability::{features, Feature, Support};
 
 use grainbench_engine::geometry::{Dim, Linear as _, D2, D3};
@@ -23,76 +25,13 @@ use grainbench_engine::run::{prepared_grains, time_step_for, Grains};
 use grainbench_engine::scene::{Criteria, ForceScale, Law, Mu, Scene, Step};
 use std::fmt;
 
-/// A DEM code grainbench can compare with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Code {
-    Rust,
-    Lammps,
-    Liggghts,
-    Yade,
-}
-
-impl Code {
-    pub const ALL: [Code; 4] = [Code::Rust, Code::Lammps, Code::Liggghts, Code::Yade];
-    pub const EXTERNAL: [Code; 3] = [Code::Lammps, Code::Liggghts, Code::Yade];
-
-    /// Name used on the command line, in directories and in golden files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Code::Rust => "rust",
-            Code::Lammps => "lammps",
-            Code::Liggghts => "liggghts",
-            Code::Yade => "yade",
-        }
-    }
-    pub fn parse(s: &str) -> Option<Code> {
-        Code::ALL.into_iter().find(|c| c.name() == s)
-    }
-    /// Executable looked up on `PATH`.
-    pub fn binary(self) -> &'static str {
-        match self {
-            Code::Rust => "grainbench",
-            Code::Lammps => "lmp",
-            Code::Liggghts => "liggghts",
-            Code::Yade => "yade",
-        }
-    }
-    /// The executable on `PATH`, if installed.
-    pub fn find(self) -> Option<std::path::PathBuf> {
-        which(self.binary())
-    }
-    /// How to install it on Debian (`ci/install-externals.sh` does all three).
-    pub fn install_hint(self) -> &'static str {
-        match self {
-            Code::Rust => "cargo install --path .",
-            Code::Lammps => "apt-get install -y --no-install-recommends lammps",
-            Code::Liggghts => "apt-get install -y --no-install-recommends liggghts",
-            Code::Yade => "apt-get install -y --no-install-recommends yade",
-        }
-    }
-}
-
-impl fmt::Display for Code {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// Finds an executable `name` on `PATH`.
-pub fn which(name: &str) -> Option<std::path::PathBuf> {
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path)
-        .map(|d| d.join(name))
-        .find(|p| p.is_file())
-}
-
 /// What a DEM stage asks of an external code, in absolute reduced units.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stage {
     pub kind: StageKind,
     /// Largest strain rate of the cell, 1/time (AR07 (23) I·√(P/m)/a, GRC08 I_a/T0).
     pub max_strain_rate: f64,
-    /// Time limit and the same in steps of [`Start::dt`].
+    /// Time limit and the same in steps of [`Stage::dt`].
     pub max_time: f64,
     pub max_steps: u64,
     pub mu: Mu,
@@ -381,7 +320,7 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
             .insert(name.clone(), format!("{:016x}", fnv1a(text.as_bytes())));
     }
     deck.files.push((
-        crate::import::Meta::FILE.into(),
+        super::import::Meta::FILE.into(),
         serde_json::to_string_pretty(&meta).expect("meta encodes") + "\n",
     ));
     Ok(deck)
@@ -389,13 +328,13 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
 
 impl Start {
     /// What the final dumps of `code` do not say (written as `deck.json` beside the deck).
-    pub fn meta(&self, code: Code) -> crate::import::Meta {
+    pub fn meta(&self, code: Code) -> super::import::Meta {
         let last = self.stages.last();
         let pressure_target = self.stages.iter().rev().find_map(|s| match s.kind {
             StageKind::Compress { pressure } => Some(pressure),
             _ => None,
         });
-        crate::import::Meta {
+        super::import::Meta {
             scene: self.scene.name.clone(),
             code: code.name().into(),
             dimension: self.dimension,
@@ -464,7 +403,7 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 
 /// Is `name` a generated data file (not committed; its checksum is in `deck.json`)?
 pub fn is_data_file(deck: &Deck, name: &str) -> bool {
-    deck.files.iter().skip(1).any(|(n, _)| n == name) && name != crate::import::Meta::FILE
+    deck.files.iter().skip(1).any(|(n, _)| n == name) && name != super::import::Meta::FILE
 }
 
 /// μ as a number for codes without an infinite friction coefficient: ∞ → 1e300.

@@ -14,7 +14,7 @@ pub mod lammps;
 pub mod liggghts;
 pub mod yade;
 
-use crate::decks::Code;
+use super::code::Code;
 use grainbench_engine::snapshot::{self, Snapshot};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

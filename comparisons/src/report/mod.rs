@@ -1,0 +1,15 @@
+//! What is shown to people: tables, JSON, plots and the comparison with the papers.
+//!
+//! * [`analysis`]: markdown table and JSON renderings of an [`Analysis`](crate::Analysis).
+//! * [`mod@format`]: the number formats of every table.
+//! * [`paper`]: the published values of `golden/paper-values.toml` (SPEC §6).
+//! * [`reproduction`]: our values over seeds against the published ones, with verdicts.
+//! * [`plots`]: P(f) with the DTS fit, g(r) and generic line plots as SVG + PNG.
+
+pub mod analysis;
+pub mod format;
+pub mod paper;
+pub mod plots;
+pub mod reproduction;
+
+pub use analysis::{to_json, to_markdown};

@@ -1,0 +1,17 @@
+//! Cross-code comparison: the same scene run by LAMMPS, LIGGGHTS and YADE (SPEC §2–§4).
+//!
+//! * [`code`]: the [`Code`] enum (one per DEM code) and executable lookup.
+//! * [`decks`]: input decks for each external code, with the capability matrix.
+//! * [`import`]: readers of each code's final dumps into our snapshot format, and the
+//!   `deck.json` metadata ([`import::Meta`]) the decks write beside themselves.
+//! * [`crosscode`]: the table of every metric of every code against the paper, the golden
+//!   values and our engine.
+//!
+//! Imports run one way: `code` ← `import` ← `decks`; `crosscode` takes only [`Code`].
+
+pub mod code;
+pub mod crosscode;
+pub mod decks;
+pub mod import;
+
+pub use code::{which, Code};
