@@ -31,9 +31,12 @@
 
 use crate::STOP;
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::decks::{Code, Start};
 use grainbench_comparisons::metrics::{analyze, Options};
-use grainbench_comparisons::{crosscode::CodeResult, paper, plots};
+use grainbench_comparisons::report::format::{sci4_or_blank, sig3_or_dash};
+use grainbench_comparisons::report::{paper, plots};
+use grainbench_comparisons::xcode::crosscode::CodeResult;
+use grainbench_comparisons::xcode::decks::Start;
+use grainbench_comparisons::xcode::Code;
 use grainbench_engine::run::{RunError, RunOptions, StepEnd};
 use grainbench_engine::scene::{Law, Step};
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
@@ -1025,23 +1028,6 @@ fn point_status(rr: &[&Record], seeds: usize) -> String {
     }
 }
 
-fn num(x: Option<f64>) -> String {
-    x.map_or(String::new(), |x| format!("{x:.4e}"))
-}
-
-/// Three significant figures.
-fn short(x: Option<f64>) -> String {
-    match x {
-        None => "—".into(),
-        Some(0.0) => "0".into(),
-        Some(x) if !x.is_finite() || x.abs() < 1e-3 || x.abs() >= 1e4 => format!("{x:.2e}"),
-        Some(x) => {
-            let decimals = (2 - x.abs().log10().floor() as i32).max(0) as usize;
-            format!("{x:.decimals$}")
-        }
-    }
-}
-
 fn write_outputs(out: &Path, base: &Scene, seeds: &[u64], t: &Table, a: &Args) -> Result<()> {
     // CSV.
     let mut csv = String::from("code,knob,value,default,status,wall_seconds,steps,phi,z_star,x0,err_phi,err_z_star,err_x0,ks,combined,pareto,paper_err_phi,paper_err_z_star,paper_err_x0,dt_fraction,inertia_cap,tolerance_factor,kappa\n");
@@ -1054,22 +1040,22 @@ fn write_outputs(out: &Path, base: &Scene, seeds: &[u64], t: &Table, a: &Args) -
             r.value,
             r.is_default,
             r.status.replace('"', "'"),
-            num(r.wall_seconds),
-            num(r.steps),
-            num(r.values.get("phi").copied()),
-            num(r.values.get("z_star").copied()),
-            num(r.values.get("x0").copied()),
-            num(r.errors.get("phi").copied()),
-            num(r.errors.get("z_star").copied()),
-            num(r.errors.get("x0").copied()),
-            num(r.errors.get("ks").copied()),
-            num(r.combined),
+            sci4_or_blank(r.wall_seconds),
+            sci4_or_blank(r.steps),
+            sci4_or_blank(r.values.get("phi").copied()),
+            sci4_or_blank(r.values.get("z_star").copied()),
+            sci4_or_blank(r.values.get("x0").copied()),
+            sci4_or_blank(r.errors.get("phi").copied()),
+            sci4_or_blank(r.errors.get("z_star").copied()),
+            sci4_or_blank(r.errors.get("x0").copied()),
+            sci4_or_blank(r.errors.get("ks").copied()),
+            sci4_or_blank(r.combined),
             r.pareto,
-            num(r.paper_errors.get("phi").copied()),
-            num(r.paper_errors.get("z_star").copied()),
-            num(r.paper_errors.get("x0").copied()),
+            sci4_or_blank(r.paper_errors.get("phi").copied()),
+            sci4_or_blank(r.paper_errors.get("z_star").copied()),
+            sci4_or_blank(r.paper_errors.get("x0").copied()),
             r.settings.dt,
-            num(r.settings.inertia),
+            sci4_or_blank(r.settings.inertia),
             r.settings.tolerance,
             r.settings.kappa,
         );
@@ -1155,22 +1141,22 @@ fn write_outputs(out: &Path, base: &Scene, seeds: &[u64], t: &Table, a: &Args) -
             md,
             "Reference ({c}): dt_fraction = {}, I = {}, tolerance × {}, κ = {} — {}, {} s per seed.  ",
             s.dt,
-            short(s.inertia),
+            sig3_or_dash(s.inertia),
             s.tolerance,
             s.kappa,
             rs.status,
-            short(rs.wall_seconds)
+            sig3_or_dash(rs.wall_seconds)
         );
         let _ = writeln!(
             md,
             "Reference means: Φ = {}, z* = {}, x0 = {}; seed spread (s.d.): Φ {}, z* {}, x0 {}, KS (leave-one-out) {}.\n",
-            short(rs.mean.get("phi").copied()),
-            short(rs.mean.get("z_star").copied()),
-            short(rs.mean.get("x0").copied()),
-            short(rs.spread.get("phi").copied()),
-            short(rs.spread.get("z_star").copied()),
-            short(rs.spread.get("x0").copied()),
-            short(rs.spread.get("ks").copied()),
+            sig3_or_dash(rs.mean.get("phi").copied()),
+            sig3_or_dash(rs.mean.get("z_star").copied()),
+            sig3_or_dash(rs.mean.get("x0").copied()),
+            sig3_or_dash(rs.spread.get("phi").copied()),
+            sig3_or_dash(rs.spread.get("z_star").copied()),
+            sig3_or_dash(rs.spread.get("x0").copied()),
+            sig3_or_dash(rs.spread.get("ks").copied()),
         );
     }
     if let Some(ps) = &t.paper_state {
@@ -1204,7 +1190,7 @@ fn write_outputs(out: &Path, base: &Scene, seeds: &[u64], t: &Table, a: &Args) -
         if paper_cols { "---|---|---|" } else { "" }
     );
     for r in &t.rows {
-        let g = |m: &BTreeMap<&str, f64>, k: &str| short(m.get(k).copied());
+        let g = |m: &BTreeMap<&str, f64>, k: &str| sig3_or_dash(m.get(k).copied());
         let _ = write!(
             md,
             "| {} | {} | {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
@@ -1213,7 +1199,7 @@ fn write_outputs(out: &Path, base: &Scene, seeds: &[u64], t: &Table, a: &Args) -
             format_args!("{:.3e}", r.value),
             if r.is_default { " *" } else { "" },
             md_status(&r.status),
-            short(r.wall_seconds),
+            sig3_or_dash(r.wall_seconds),
             r.steps
                 .filter(|s| *s > 0.0)
                 .map_or("—".into(), |s| format!("{s:.0}")),
@@ -1224,7 +1210,7 @@ fn write_outputs(out: &Path, base: &Scene, seeds: &[u64], t: &Table, a: &Args) -
             g(&r.errors, "z_star"),
             g(&r.errors, "x0"),
             g(&r.errors, "ks"),
-            short(r.combined),
+            sig3_or_dash(r.combined),
             if r.pareto { "P" } else { "" },
         );
         if paper_cols {

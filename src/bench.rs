@@ -7,8 +7,10 @@
 use crate::compare::{self, Finished};
 use crate::STOP;
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::crosscode::CodeResult;
-use grainbench_comparisons::decks::{lammps_table, Code, Deck, StageKind, Start, Tolerances};
+use grainbench_comparisons::report::format::sci3;
+use grainbench_comparisons::xcode::crosscode::CodeResult;
+use grainbench_comparisons::xcode::decks::{lammps_table, Deck, StageKind, Start, Tolerances};
+use grainbench_comparisons::xcode::Code;
 use grainbench_engine::geometry::{D2, D3};
 use grainbench_engine::run::initial_grains;
 use grainbench_engine::scene::{Criteria, Scene, Step};
@@ -458,7 +460,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
         if code != Code::Rust
             && matches!(code, Code::Lammps | Code::Liggghts)
             && a.threads.iter().any(|&t| t > 1)
-            && grainbench_comparisons::decks::which("mpirun").is_none()
+            && grainbench_comparisons::xcode::which("mpirun").is_none()
             && ready.is_some()
         {
             r.outcome = "missing".into();
@@ -706,7 +708,7 @@ fn run_external(
         if r.version.is_none() {
             r.version = compare::version_line(code, &dir.join("stdout.log"));
         }
-        run.status = Some(grainbench_comparisons::import::read_status(
+        run.status = Some(grainbench_comparisons::xcode::import::read_status(
             &dir.join("final.status"),
         ));
         run.steps = log_steps(dir);
@@ -850,10 +852,6 @@ fn rows_of(setups: &[Setup], threads: &[usize], runs: &[Run]) -> Vec<Row> {
     rows
 }
 
-fn sig(x: f64) -> String {
-    format!("{x:.3e}")
-}
-
 fn fixed(d: usize) -> impl Fn(f64) -> String {
     move |x| format!("{x:.d$}")
 }
@@ -888,8 +886,8 @@ pub fn to_markdown(r: &Report) -> String {
             Stat::text(row.steps, fixed(0)),
             Stat::text(row.wall_seconds, fixed(2)),
             Stat::text(row.loop_seconds, fixed(2)),
-            Stat::text(row.particle_steps_per_second, sig),
-            Stat::text(row.loop_particle_steps_per_second, sig),
+            Stat::text(row.particle_steps_per_second, sci3),
+            Stat::text(row.loop_particle_steps_per_second, sci3),
             Stat::text(row.peak_rss_mib, fixed(1)),
             Stat::text(row.rate_ratio, fixed(3)),
             Stat::text(row.wall_ratio, fixed(3)),

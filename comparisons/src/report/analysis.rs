@@ -1,5 +1,6 @@
 //! Rendering an [`Analysis`]: a markdown table (`metric | value | note`) or JSON.
 
+use super::format::sig6;
 use crate::metrics::Analysis;
 use std::fmt::Write;
 
@@ -8,26 +9,12 @@ pub fn to_json(a: &Analysis) -> String {
     serde_json::to_string_pretty(a).expect("Analysis serialises to JSON")
 }
 
-/// A number with 6 significant digits, scientific notation outside [1e-3, 1e6).
-pub fn fmt_num(x: f64) -> String {
-    if x == 0.0 {
-        "0".to_string()
-    } else if !x.is_finite() {
-        format!("{x}")
-    } else if (1e-3..1e6).contains(&x.abs()) {
-        let digits = 5 - x.abs().log10().floor() as i32;
-        format!("{:.*}", digits.max(0) as usize, x)
-    } else {
-        format!("{x:.5e}")
-    }
-}
-
 fn opt(x: Option<f64>) -> String {
-    x.map(fmt_num).unwrap_or_else(|| "n/a".to_string())
+    x.map(sig6).unwrap_or_else(|| "n/a".to_string())
 }
 
 fn pct(x: f64) -> String {
-    format!("{}%", fmt_num(100.0 * x))
+    format!("{}%", sig6(100.0 * x))
 }
 
 /// Abscissa of the largest ordinate (first one on ties).
@@ -50,14 +37,14 @@ pub fn to_markdown(a: &Analysis) -> String {
     row("dimension", a.dimension.to_string(), "");
     row(
         "μ",
-        a.mu.map(fmt_num).unwrap_or_else(|| "∞".into()),
+        a.mu.map(sig6).unwrap_or_else(|| "∞".into()),
         if a.cohesive {
             "cohesive law"
         } else {
             "cohesionless law"
         },
     );
-    row("Φ", fmt_num(a.packing_fraction), "solid fraction");
+    row("Φ", sig6(a.packing_fraction), "solid fraction");
     row(
         "interactions",
         a.interactions.to_string(),
@@ -65,7 +52,7 @@ pub fn to_markdown(a: &Analysis) -> String {
     );
     row(
         "force threshold",
-        fmt_num(a.force_threshold),
+        sig6(a.force_threshold),
         if a.cohesive {
             "absolute, in F0 (GRC07 T.VI)"
         } else {
@@ -86,7 +73,7 @@ pub fn to_markdown(a: &Analysis) -> String {
             "force-carrying contacts between backbone grains"
         },
     );
-    row("z", fmt_num(a.z), "2N_c/n (AR07 §III.B)");
+    row("z", sig6(a.z), "2N_c/n (AR07 §III.B)");
     row("rule", format!("{:?}", a.rule), &a.rule.describe());
     row(
         "x0",
@@ -113,7 +100,7 @@ pub fn to_markdown(a: &Analysis) -> String {
     if let Some(f) = &a.fixed_rattlers {
         row(
             "z^II(0)",
-            fmt_num(f.z_geometric),
+            sig6(f.z_geometric),
             &format!(
                 "rattlers fixed onto the backbone (AR07 §III.C, II): {} moved, {} contacts with \
                  rattlers ({} between rattlers), {} unsettled",
@@ -131,9 +118,9 @@ pub fn to_markdown(a: &Analysis) -> String {
         }
     }
     if let Some(s) = &a.cohesive_split {
-        row("z+", fmt_num(s.z_plus), "repulsive (GRC07 T.VI)");
-        row("z−", fmt_num(s.z_minus), "attractive");
-        row("z0", fmt_num(s.z_zero), "|N| ≤ threshold");
+        row("z+", sig6(s.z_plus), "repulsive (GRC07 T.VI)");
+        row("z−", sig6(s.z_minus), "attractive");
+        row("z0", sig6(s.z_zero), "|N| ≤ threshold");
         row("distant pairs", s.distant.to_string(), "gap > 0");
         row("N+", opt(s.mean_repulsive), "mean repulsive force");
         row("N+^(2)", opt(s.rms_repulsive), "quadratic mean");
@@ -157,7 +144,7 @@ pub fn to_markdown(a: &Analysis) -> String {
                     p.contacts
                 ),
             );
-            row(&format!("X1^({k})"), fmt_num(p.x1), "fraction with N > ⟨N⟩");
+            row(&format!("X1^({k})"), sig6(p.x1), "fraction with N > ⟨N⟩");
             row(&format!("M1^({k})"), opt(p.m1), "⟨|T|/N⟩, N > ⟨N⟩");
             row(&format!("M2^({k})"), opt(p.m2), "⟨|T|/N⟩, N < ⟨N⟩");
         }
@@ -169,8 +156,8 @@ pub fn to_markdown(a: &Analysis) -> String {
             &format!(
                 "f = N/{}, width {}, mode at f = {} (series in JSON: forces.pdf)",
                 if a.cohesive { "F0" } else { "⟨N⟩" },
-                fmt_num(h.bin_width),
-                fmt_num(mode(&h.x, &h.y))
+                sig6(h.bin_width),
+                sig6(mode(&h.x, &h.y))
             ),
         );
     }
@@ -180,7 +167,7 @@ pub fn to_markdown(a: &Analysis) -> String {
             format!("{} bins", h.x.len()),
             &format!(
                 "angle between n and F (GRC07 Fig. 15), mode at {}° (series in JSON: forces.angles)",
-                fmt_num(mode(&h.x, &h.y))
+                sig6(mode(&h.x, &h.y))
             ),
         );
     }
@@ -191,8 +178,8 @@ pub fn to_markdown(a: &Analysis) -> String {
             format!("{} bins", g.x.len()),
             &format!(
                 "peak g = {} at r/a = {} (series in JSON: structure.pair_correlation)",
-                fmt_num(g.y.iter().copied().fold(0.0, f64::max)),
-                fmt_num(mode(&g.x, &g.y))
+                sig6(g.y.iter().copied().fold(0.0, f64::max)),
+                sig6(mode(&g.x, &g.y))
             ),
         );
     }
@@ -205,7 +192,7 @@ pub fn to_markdown(a: &Analysis) -> String {
             let at = |h: f64| {
                 z.x.iter()
                     .position(|&x| x >= h * (1.0 - 1e-9))
-                    .map(|k| fmt_num(z.y[k]))
+                    .map(|k| sig6(z.y[k]))
                     .unwrap_or_else(|| "n/a".into())
             };
             row(
@@ -220,10 +207,10 @@ pub fn to_markdown(a: &Analysis) -> String {
         }
     }
     if let Some(b) = &a.bond_order {
-        let dc = format!("d_c = {}a", fmt_num(b.cutoff));
+        let dc = format!("d_c = {}a", sig6(b.cutoff));
         row(
             "Z (bonds)",
-            fmt_num(b.z_bond),
+            sig6(b.z_bond),
             &format!("{dc}, {} bonds (AR07 T.II)", b.bonds),
         );
         row("Q6", opt(b.q6_global), "global, over all bonds");
@@ -232,12 +219,12 @@ pub fn to_markdown(a: &Analysis) -> String {
         row("Q4^loc", opt(b.q4_local), "mean of AR07 (31)");
         row(
             "Z_cr",
-            fmt_num(b.z_cr),
+            sig6(b.z_cr),
             &format!("{} crystalline bonds, AR07 (34)", b.crystalline_bonds),
         );
         row(
             "x_cr",
-            fmt_num(b.x_cr),
+            sig6(b.x_cr),
             &format!("{} grains with ≥ 7 crystalline bonds", b.crystalline_grains),
         );
         row(
@@ -259,32 +246,32 @@ pub fn to_markdown(a: &Analysis) -> String {
     row("P kinetic", opt(p.kinetic), "tr σ_kinetic / d");
     row(
         "P exact",
-        fmt_num(p.exact),
+        sig6(p.exact),
         &format!(
             "(1/dΩ) Σ (N|r| + T·r), rel. diff {} (tangential part {})",
             opt(p.exact_rel_diff),
-            fmt_num(p.exact_tangential)
+            sig6(p.exact_tangential)
         ),
     );
     if let Some(r) = &p.ar07_22 {
         row(
             "P, AR07 (22)",
-            fmt_num(r.p_predicted),
+            sig6(r.p_predicted),
             &format!(
                 "zΦ⟨N⟩/(πa²), a = {}, rel. diff {}",
-                fmt_num(r.diameter),
-                fmt_num(r.rel_diff)
+                sig6(r.diameter),
+                sig6(r.rel_diff)
             ),
         );
     }
     if let Some(r) = &p.rumpf {
         row(
             "⟨N⟩, GRC07 (17)",
-            fmt_num(r.mean_normal_predicted),
+            sig6(r.mean_normal_predicted),
             &format!(
                 "π⟨d^D⟩P/(⟨d⟩zΦ), ⟨d⟩ = {}, ⟨d^D⟩ = {}, rel. diff {}",
-                fmt_num(r.mean_diameter),
-                fmt_num(r.mean_diameter_pow_d),
+                sig6(r.mean_diameter),
+                sig6(r.mean_diameter_pow_d),
                 opt(r.rel_diff)
             ),
         );
@@ -292,12 +279,12 @@ pub fn to_markdown(a: &Analysis) -> String {
     if let Some(r) = &p.grc07_18 {
         row(
             "⟨N⟩, GRC07 (18)",
-            fmt_num(r.mean_normal_predicted),
+            sig6(r.mean_normal_predicted),
             &format!(
                 "7πaP/(9zΦ), a = {}, ⟨d⟩/a = {} (3/4), ⟨d²⟩/a² = {} (7/12), rel. diff {}",
-                fmt_num(r.a),
-                fmt_num(r.mean_diameter_over_a),
-                fmt_num(r.mean_diameter_sq_over_a2),
+                sig6(r.a),
+                sig6(r.mean_diameter_over_a),
+                sig6(r.mean_diameter_sq_over_a2),
                 opt(r.rel_diff)
             ),
         );
@@ -310,7 +297,7 @@ pub fn to_markdown(a: &Analysis) -> String {
         a.scene,
         a.code,
         a.step,
-        fmt_num(a.time),
+        sig6(a.time),
         a.status
     );
     out.push_str("| metric | value | note |\n| --- | --- | --- |\n");
@@ -318,19 +305,4 @@ pub fn to_markdown(a: &Analysis) -> String {
         let _ = writeln!(out, "| {m} | {v} | {} |", n.replace('|', "\\|"));
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn numbers() {
-        assert_eq!(fmt_num(0.0), "0");
-        assert_eq!(fmt_num(0.637), "0.637000");
-        assert_eq!(fmt_num(6.074), "6.07400");
-        assert_eq!(fmt_num(4000.0), "4000.00");
-        assert_eq!(fmt_num(1e-6), "1.00000e-6");
-        assert_eq!(fmt_num(-0.5), "-0.500000");
-    }
 }

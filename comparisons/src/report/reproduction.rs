@@ -1,6 +1,6 @@
 //! The reproduction table: our values over several seeds against the published ones.
 //!
-//! Input: a state key of `golden/paper-values.toml` (see [`crate::paper`]) and, per seed, a list
+//! Input: a state key of `golden/paper-values.toml` (see [`super::paper`]) and, per seed, a list
 //! of `(metric key, value)` pairs. For every metric the paper gives for that state, one [`Row`]:
 //! our mean, sample s.d. and number of seeds; the paper's value, s.d. and reference; the
 //! difference in units of the paper's s.d. (or relative, where the paper gives none); the
@@ -16,7 +16,8 @@
 //! Rendered as Markdown ([`Reproduction::to_markdown`]), CSV ([`Reproduction::to_csv`]) and
 //! JSON ([`Reproduction::to_json`]).
 
-use crate::paper::{self, StateValues};
+use super::format::{sig4, signed_sig4};
+use super::paper::{self, StateValues};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
@@ -113,7 +114,7 @@ impl Verdict {
 /// One metric of the reproduction table.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Row {
-    /// Metric key (see [`crate::paper::METRIC_KEYS`]).
+    /// Metric key (see [`super::paper::METRIC_KEYS`]).
     pub metric: String,
     /// Our value over the seeds; `None` if no seed gave it.
     pub ours: Option<SeedStats>,
@@ -135,7 +136,7 @@ pub struct Row {
 
 impl Row {
     /// Compares our seed statistics with one published value.
-    pub fn compare(metric: &str, ours: Option<SeedStats>, paper: &crate::paper::PaperValue) -> Row {
+    pub fn compare(metric: &str, ours: Option<SeedStats>, paper: &super::paper::PaperValue) -> Row {
         let sd = paper.sd.filter(|s| *s > 0.0);
         let diff_kind = match sd {
             Some(_) => DiffKind::PaperSd,
@@ -183,7 +184,7 @@ pub struct Reproduction {
     pub description: String,
     /// Number of seeds given (some may lack some metrics).
     pub seeds: usize,
-    /// One row per published metric, in the order of [`crate::paper::METRIC_KEYS`].
+    /// One row per published metric, in the order of [`super::paper::METRIC_KEYS`].
     pub rows: Vec<Row>,
     /// Metrics we measured that the paper does not give for this state.
     pub unmatched: Vec<String>,
@@ -217,20 +218,20 @@ impl Reproduction {
             let ours = match &r.ours {
                 None => "—".to_string(),
                 Some(o) => match o.sd {
-                    Some(sd) => format!("{} ± {} (n={})", sig(o.mean), sig(sd), o.n),
-                    None => format!("{} (n={})", sig(o.mean), o.n),
+                    Some(sd) => format!("{} ± {} (n={})", sig4(o.mean), sig4(sd), o.n),
+                    None => format!("{} (n={})", sig4(o.mean), o.n),
                 },
             };
             let paper = match r.paper_sd {
-                Some(sd) => format!("{} ± {}", sig(r.paper_value), sig(sd)),
-                None => sig(r.paper_value),
+                Some(sd) => format!("{} ± {}", sig4(r.paper_value), sig4(sd)),
+                None => sig4(r.paper_value),
             };
             let diff = match r.diff {
                 None => "—".to_string(),
                 Some(d) => match r.diff_kind {
                     DiffKind::PaperSd => format!("{d:+.2} σ"),
                     DiffKind::Relative => format!("{:+.2} %", 100.0 * d),
-                    DiffKind::Absolute => format!("{} abs", signed_sig(d)),
+                    DiffKind::Absolute => format!("{} abs", signed_sig4(d)),
                 },
             };
             let own = r
@@ -357,32 +358,6 @@ pub fn build_against(
     })
 }
 
-/// Four significant digits, without trailing zeros or exponent for ordinary magnitudes.
-fn sig(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let mag = x.abs().log10().floor() as i32;
-    if !(-4..6).contains(&mag) {
-        return format!("{x:.3e}");
-    }
-    let decimals = (3 - mag).max(0) as usize;
-    let s = format!("{x:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
-}
-
-fn signed_sig(x: f64) -> String {
-    if x >= 0.0 {
-        format!("+{}", sig(x))
-    } else {
-        sig(x)
-    }
-}
-
 fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
@@ -394,7 +369,7 @@ fn csv_field(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::paper::parse;
+    use crate::report::paper::parse;
 
     fn seeds(rows: &[&[(&str, f64)]]) -> Vec<Vec<(String, f64)>> {
         rows.iter()
@@ -603,17 +578,5 @@ x0 = { value = 0.10, sd = 0.004, ref = "AR07 T.IV, note" }
             };
             assert!(close(b.diff, o.diff) && close(b.diff_own_sd, o.diff_own_sd));
         }
-    }
-
-    #[test]
-    fn significant_digits() {
-        assert_eq!(sig(0.5923), "0.5923");
-        assert_eq!(sig(6.074), "6.074");
-        assert_eq!(sig(0.0015), "0.0015");
-        assert_eq!(sig(12.36), "12.36");
-        assert_eq!(sig(2084.0), "2084");
-        assert_eq!(sig(1.15e-4), "0.000115");
-        assert_eq!(sig(3.0e-7), "3.000e-7");
-        assert_eq!(signed_sig(0.0015), "+0.0015");
     }
 }

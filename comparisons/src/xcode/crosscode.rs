@@ -2,8 +2,9 @@
 //! the golden (recorded) values and our engine, with the stated tolerances
 //! (`golden/xcode-bands.toml`).
 
-use crate::decks::Code;
-use crate::paper;
+use super::code::Code;
+use crate::report::format::dec4;
+use crate::report::paper;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -77,7 +78,7 @@ pub struct Bands {
 
 impl Bands {
     pub const FILE: &'static str = "golden/xcode-bands.toml";
-    pub const TEXT: &'static str = include_str!("../../golden/xcode-bands.toml");
+    pub const TEXT: &'static str = include_str!("../../../golden/xcode-bands.toml");
 
     pub fn embedded() -> Bands {
         toml::from_str(Self::TEXT).expect("golden/xcode-bands.toml parses (tested)")
@@ -124,10 +125,12 @@ pub struct Comparison {
 /// outside the repository still shows them for the codes that are not installed.
 fn embedded_golden(scene: &str, code: &str) -> Option<&'static str> {
     match (scene, code) {
-        ("xcode-smoke", "rust") => Some(include_str!("../../golden/xcode-smoke/rust.json")),
-        ("xcode-smoke", "lammps") => Some(include_str!("../../golden/xcode-smoke/lammps.json")),
-        ("xcode-smoke", "liggghts") => Some(include_str!("../../golden/xcode-smoke/liggghts.json")),
-        ("xcode-smoke", "yade") => Some(include_str!("../../golden/xcode-smoke/yade.json")),
+        ("xcode-smoke", "rust") => Some(include_str!("../../../golden/xcode-smoke/rust.json")),
+        ("xcode-smoke", "lammps") => Some(include_str!("../../../golden/xcode-smoke/lammps.json")),
+        ("xcode-smoke", "liggghts") => {
+            Some(include_str!("../../../golden/xcode-smoke/liggghts.json"))
+        }
+        ("xcode-smoke", "yade") => Some(include_str!("../../../golden/xcode-smoke/yade.json")),
         _ => None,
     }
 }
@@ -304,16 +307,6 @@ pub fn build(
     }
 }
 
-fn fmt(x: f64) -> String {
-    if x == 0.0 {
-        "0".into()
-    } else if x.abs() >= 1e-3 && x.abs() < 1e4 {
-        format!("{x:.4}")
-    } else {
-        format!("{x:.3e}")
-    }
-}
-
 impl Comparison {
     /// Markdown: one column per code; each cell `value [golden] (Δ/σ_paper; Δ/σ_seeds vs rust)`.
     pub fn to_markdown(&self, all_metrics: bool) -> String {
@@ -350,22 +343,24 @@ impl Comparison {
             let paper = match (r.paper, r.paper_sd) {
                 (Some(v), Some(sd)) => format!(
                     "{} ± {} ({})",
-                    fmt(v),
-                    fmt(sd),
+                    dec4(v),
+                    dec4(sd),
                     r.reference.as_deref().unwrap_or("")
                 ),
-                (Some(v), None) => format!("{} ({})", fmt(v), r.reference.as_deref().unwrap_or("")),
+                (Some(v), None) => {
+                    format!("{} ({})", dec4(v), r.reference.as_deref().unwrap_or(""))
+                }
                 _ => "–".into(),
             };
             s.push_str(&format!("| {} | {} |", r.metric, paper));
             let ours = r.values.get(Code::Rust.name());
             for c in &self.codes {
                 let mut cell = match r.values.get(&c.code) {
-                    Some(v) => fmt(*v),
+                    Some(v) => dec4(*v),
                     None => "–".into(),
                 };
                 if let Some(g) = r.golden.get(&c.code) {
-                    cell.push_str(&format!(" [{}]", fmt(*g)));
+                    cell.push_str(&format!(" [{}]", dec4(*g)));
                 }
                 let mut notes = Vec::new();
                 if let Some(z) = r.paper_sigma.get(&c.code) {
@@ -387,7 +382,7 @@ impl Comparison {
             s.push_str(&format!(
                 " {} |\n",
                 r.tolerance
-                    .map(|t| format!("± {}", fmt(t)))
+                    .map(|t| format!("± {}", dec4(t)))
                     .unwrap_or("–".into())
             ));
         }
