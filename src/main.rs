@@ -13,7 +13,6 @@ mod accuracy;
 mod bench;
 mod compare;
 mod reproduce;
-mod scale;
 mod xcode;
 
 /// Set by the first Ctrl-C (or SIGTERM): runs stop cleanly at their next check.

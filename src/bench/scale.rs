@@ -8,7 +8,7 @@
 //! small strain-rate cap (1e-3) so that it stays dense over the timed steps; it is not
 //! equilibrated.
 
-use crate::bench::{Args, Stat};
+use super::{Args, Stat};
 use crate::compare;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::plots::{line_plot, Axis, LinePlot, Marks, Series};

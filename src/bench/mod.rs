@@ -2,7 +2,7 @@
 //! alternating the codes run by run, and reports throughput (particle-steps/s), wall time and
 //! steps to equilibrium (or for `--steps S` a fixed number of steps), peak resident memory per
 //! child process and the ratio to our engine. `--scale N1,N2,…` times our engine alone on
-//! dense packings of growing size ([`crate::scale`]).
+//! dense packings of growing size ([`scale`]).
 
 use crate::compare::{self, Finished};
 use crate::STOP;
@@ -17,6 +17,8 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::Ordering;
+
+mod scale;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -69,9 +71,9 @@ pub fn bench(a: &Args) -> Result<i32> {
         return child_run(a);
     }
     if let Some(n) = a.child_scale {
-        return crate::scale::child(
+        return scale::child(
             n,
-            a.steps.unwrap_or(crate::scale::DEFAULT_STEPS),
+            a.steps.unwrap_or(scale::DEFAULT_STEPS),
             a.threads[0],
         );
     }
@@ -91,7 +93,7 @@ pub fn bench(a: &Args) -> Result<i32> {
         if !a.codes.is_empty() && a.codes.iter().any(|c| c != "rust") {
             bail!("--scale runs our engine only (--codes rust)");
         }
-        return crate::scale::sweep(a);
+        return scale::sweep(a);
     }
     let Some(spec) = &a.scene else {
         bail!("give a scene (`grainbench bench xcode-smoke`) or --scale N,…");
