@@ -29,7 +29,8 @@
 //! (fix press/berendsen), no equilibrium criteria of ours (it runs the deck's fixed number of
 //! steps) and its κ is our κ converted to a modulus, fixed by the deck: only `dt` is swept there.
 
-use crate::STOP;
+use crate::common::{install_stop_handler, load_scene, STOP};
+use crate::external;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::decks::{Code, Start};
 use grainbench_comparisons::metrics::{analyze, Options};
@@ -493,7 +494,7 @@ struct Row {
 }
 
 pub fn accuracy(a: &Args) -> Result<i32> {
-    let base = crate::load_scene(&a.scene)?;
+    let base = load_scene(&a.scene)?;
     if a.seeds.is_empty() {
         bail!("--seeds needs at least one seed (e.g. --seeds 1,2,3)");
     }
@@ -599,7 +600,7 @@ pub fn accuracy(a: &Args) -> Result<i32> {
         .unwrap_or_else(|| Path::new("runs/accuracy").join(&base.name));
     std::fs::create_dir_all(&out)
         .with_context(|| format!("creating the output directory {}", out.display()))?;
-    crate::install_stop_handler();
+    install_stop_handler();
 
     // Run every distinct (code, settings, seed) once, cached on disk.
     let mut records: BTreeMap<(String, String, u64), Record> = BTreeMap::new();
@@ -747,18 +748,9 @@ fn run_rust(scene: &Scene, r: &mut Record) -> Result<()> {
 /// LAMMPS from the same start (compare's machinery); only the dt knob reaches its deck.
 fn run_external(scene: &Scene, code: Code, dir: &Path, a: &Args, r: &mut Record) -> Result<()> {
     let start = Start::of(scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
-    let args = crate::compare::Args {
-        scene: scene.name.clone(),
-        codes: vec![code.name().into()],
-        out: Some(dir.to_owned()),
-        time_limit: a.time_limit,
-        np: None,
-        quiet: true,
-        all_metrics: false,
-    };
     let mut cr = CodeResult::new(code.name(), "ok");
     let work = dir.join("work");
-    let snap = crate::compare::run_external(&start, code, &work, &args, &mut cr)?;
+    let snap = external::run(&start, code, &work, a.time_limit, None, true, &mut cr)?;
     r.wall_seconds = cr.wall_seconds.unwrap_or(0.0);
     match snap {
         Some(s) => {

@@ -4,8 +4,9 @@
 //! child process and the ratio to our engine. `--scale N1,N2,…` times our engine alone on
 //! dense packings of growing size ([`scale`]).
 
-use crate::compare::{self, Finished};
-use crate::STOP;
+use crate::common::{install_stop_handler, load_scene, set_threads, STOP};
+use crate::external;
+use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::CodeResult;
 use grainbench_comparisons::decks::{lammps_table, Code, Deck, StageKind, Start, Tolerances};
@@ -71,11 +72,7 @@ pub fn bench(a: &Args) -> Result<i32> {
         return child_run(a);
     }
     if let Some(n) = a.child_scale {
-        return scale::child(
-            n,
-            a.steps.unwrap_or(scale::DEFAULT_STEPS),
-            a.threads[0],
-        );
+        return scale::child(n, a.steps.unwrap_or(scale::DEFAULT_STEPS), a.threads[0]);
     }
     if a.time_limit.is_nan() || a.time_limit <= 0.0 {
         bail!("--time-limit must be a positive number of seconds");
@@ -107,15 +104,15 @@ fn child_run(a: &Args) -> Result<i32> {
     let (Some(scene), Some(out)) = (&a.scene, &a.out) else {
         bail!("--child-run needs a scene file and --out");
     };
-    crate::set_threads(Some(a.threads[0]))?;
-    let scene = crate::load_scene(scene)?;
-    let flags = crate::RunFlags {
+    set_threads(Some(a.threads[0]))?;
+    let scene = load_scene(scene)?;
+    let flags = RunFlags {
         quiet: false,
         report: false,
         resume: false,
         checkpoint_every: 1e12,
     };
-    Ok(crate::run(&scene, out, &flags)?.0)
+    Ok(run(&scene, out, &flags)?.0)
 }
 
 /// How the runs stop.
@@ -361,7 +358,7 @@ pub struct Report {
 type Setup = (Code, CodeResult, Option<(PathBuf, Deck)>);
 
 fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
-    let mut scene = crate::load_scene(spec)?;
+    let mut scene = load_scene(spec)?;
     if let Some(snap) = &a.start {
         scene = from_snapshot(&scene, snap)?;
     }
@@ -377,7 +374,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
     std::fs::create_dir_all(&out)
         .with_context(|| format!("creating the output directory {}", out.display()))?;
     let out = std::path::absolute(&out)?;
-    crate::install_stop_handler();
+    install_stop_handler();
     let externals = codes.iter().any(|c| *c != Code::Rust);
     let (scene, start, mode) = match a.steps {
         Some(s) => {
@@ -422,7 +419,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
                 r.version = Some(format!("grainbench {}", env!("CARGO_PKG_VERSION")));
                 None
             }
-            (_, Some(st)) => compare::prepare_external(st, code, &mut r),
+            (_, Some(st)) => external::prepare(st, code, &mut r),
             (_, None) => unreachable!("a start is made when external codes run"),
         };
         let ready = match (ready, code, mode, &start) {
@@ -602,10 +599,6 @@ fn run_line(r: &Run) -> String {
     s
 }
 
-fn peak(done: &Finished) -> u64 {
-    done.max_rss_kib.max(done.group_rss_kib)
-}
-
 fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut Run) -> Result<()> {
     if dir.exists() {
         std::fs::remove_dir_all(dir).with_context(|| format!("clearing {}", dir.display()))?;
@@ -619,7 +612,7 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
         "--threads",
         &threads.to_string(),
     ]);
-    let done = compare::supervise(
+    let done = external::supervise(
         &mut cmd,
         dir,
         "rust",
@@ -627,7 +620,7 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
         a.quiet,
         Some("stderr.log"),
     )?;
-    run.peak_rss_kib = Some(peak(&done));
+    run.peak_rss_kib = Some(done.peak_rss_kib());
     run.process_seconds = Some(done.wall_seconds);
     match done.status {
         None => {
@@ -648,7 +641,7 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
             run.outcome = "failed".into();
             run.message = Some(format!(
                 "exited with {s}: {:?}; logs in {}",
-                compare::failure_line(&dir.join("stderr.log")),
+                external::failure_line(&dir.join("stderr.log")),
                 dir.display()
             ));
             return Ok(());
@@ -689,10 +682,10 @@ fn run_external(
     r: &mut CodeResult,
     run: &mut Run,
 ) -> Result<()> {
-    compare::write_fresh_deck(deck, dir)?;
+    external::write_fresh_deck(deck, dir)?;
     let np = (threads > 1).then_some(threads);
-    let mut cmd = compare::external_command(code, binary, deck, np, Some(threads))?;
-    let done = compare::supervise(
+    let mut cmd = external::command(code, binary, deck, np, Some(threads))?;
+    let done = external::supervise(
         &mut cmd,
         dir,
         code.name(),
@@ -700,19 +693,19 @@ fn run_external(
         a.quiet,
         Some("stdout.log"),
     )?;
-    run.peak_rss_kib = Some(peak(&done));
+    run.peak_rss_kib = Some(done.peak_rss_kib());
     run.wall_seconds = Some(done.wall_seconds);
     let throughput_only = deck.files.iter().any(|(n, _)| n == lammps_table::TABLE);
     if throughput_only && done.status.is_some_and(|s| s.success()) {
         // No final state to read back: steps and status from the log.
         if r.version.is_none() {
-            r.version = compare::version_line(code, &dir.join("stdout.log"));
+            r.version = external::version_line(code, &dir.join("stdout.log"));
         }
         run.status = Some(grainbench_comparisons::import::read_status(
             &dir.join("final.status"),
         ));
-        run.steps = log_steps(dir);
-        run.loop_seconds = loop_time(code, dir);
+        run.steps = external::log_steps(dir);
+        run.loop_seconds = external::loop_time(code, dir);
         if run.steps.is_none() {
             run.outcome = "failed".into();
             run.message = Some(format!(
@@ -724,7 +717,7 @@ fn run_external(
         return Ok(());
     }
     let mut res = CodeResult::new(code.name(), "ran");
-    let snap = compare::finish_external(code, dir, &done, a.time_limit, &mut res)?;
+    let snap = external::finish(code, dir, &done, a.time_limit, &mut res)?;
     if r.version.is_none() {
         r.version = res.version.clone();
     }
@@ -733,54 +726,11 @@ fn run_external(
     if let Some(snap) = snap {
         run.status = Some(snap.status.clone());
         run.steps = Some(snap.step);
-        run.loop_seconds = loop_time(code, dir);
+        run.loop_seconds = external::loop_time(code, dir);
     } else {
         run.wall_seconds = None;
     }
     Ok(())
-}
-
-/// Steps of a LAMMPS/LIGGGHTS run: the sum of its `Loop time of … for S steps` lines.
-fn log_steps(dir: &Path) -> Option<u64> {
-    let text = std::fs::read_to_string(dir.join("stdout.log")).ok()?;
-    let steps: Vec<u64> = text
-        .lines()
-        .filter(|l| l.starts_with("Loop time of "))
-        .filter_map(|l| {
-            l.split(" for ")
-                .nth(1)?
-                .split_whitespace()
-                .next()?
-                .parse()
-                .ok()
-        })
-        .collect();
-    (!steps.is_empty()).then(|| steps.iter().sum())
-}
-
-/// Time-stepping loop time from a code's log: the sum of LAMMPS/LIGGGHTS `Loop time of X on
-/// P procs for S steps` lines, or YADE's `done: … after S steps, T s`.
-pub fn loop_time(code: Code, dir: &Path) -> Option<f64> {
-    let text = std::fs::read_to_string(dir.join("stdout.log")).ok()?;
-    match code {
-        Code::Lammps | Code::Liggghts => {
-            let times: Vec<f64> = text
-                .lines()
-                .filter_map(|l| l.strip_prefix("Loop time of "))
-                .filter_map(|l| l.split_whitespace().next()?.parse().ok())
-                .collect();
-            (!times.is_empty()).then(|| times.iter().sum())
-        }
-        Code::Yade => text
-            .lines()
-            .rev()
-            .find_map(|l| l.strip_prefix("done: "))
-            .and_then(|l| l.rsplit(", ").next())
-            .and_then(|t| t.trim().trim_end_matches('s').trim().parse().ok())
-            // Printed to 0.1 s: shorter loops are unknown.
-            .filter(|&t: &f64| t >= 0.1),
-        Code::Rust => None,
-    }
 }
 
 fn rows_of(setups: &[Setup], threads: &[usize], runs: &[Run]) -> Vec<Row> {
@@ -995,25 +945,8 @@ mod tests {
     }
 
     #[test]
-    fn loop_times_from_logs() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::write(
-            dir.path().join("stdout.log"),
-            "Loop time of 1.5 on 1 procs for 200 steps with 256 atoms\n\nLoop time of 0.25 on 1 procs for 0 steps with 256 atoms\n",
-        )
-        .unwrap();
-        assert_eq!(loop_time(Code::Lammps, dir.path()), Some(1.75));
-        std::fs::write(
-            dir.path().join("stdout.log"),
-            "stage 0 …\ndone: time-limit after 400 steps, 3.2 s\n",
-        )
-        .unwrap();
-        assert_eq!(loop_time(Code::Yade, dir.path()), Some(3.2));
-    }
-
-    #[test]
     fn fixed_steps_cuts_to_the_first_dem_stage_and_rounds_up() {
-        let scene = crate::load_scene("xcode-smoke").unwrap();
+        let scene = load_scene("xcode-smoke").unwrap();
         let (cut, start, steps) = fixed_steps(&scene, 250).unwrap();
         assert_eq!(steps, 400);
         assert_eq!(start.stages.len(), 1);

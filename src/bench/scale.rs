@@ -9,7 +9,8 @@
 //! equilibrated.
 
 use super::{Args, Stat};
-use crate::compare;
+use crate::common::{install_stop_handler, set_threads, STOP};
+use crate::external;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::plots::{line_plot, Axis, LinePlot, Marks, Series};
 use grainbench_engine::cell::{Cell, Control};
@@ -159,7 +160,7 @@ fn vm_hwm() -> Option<u64> {
 
 /// The child: prepares one size, times `steps` steps, prints a [`Point`] as JSON.
 pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
-    crate::set_threads(Some(threads))?;
+    set_threads(Some(threads))?;
     let t0 = Instant::now();
     let (copies, base) = tiling(n_wanted);
     let (s0, l0) = random_packing(base)?;
@@ -231,13 +232,13 @@ pub fn sweep(a: &Args) -> Result<i32> {
     std::fs::create_dir_all(&out)
         .with_context(|| format!("creating the output directory {}", out.display()))?;
     let out = std::path::absolute(&out)?;
-    crate::install_stop_handler();
+    install_stop_handler();
     let exe = std::env::current_exe().context("locating the grainbench executable")?;
     let mut points: Vec<Point> = Vec::new();
     let mut failures = Vec::new();
     for &n in &a.scale {
         for &t in &a.threads {
-            if crate::STOP.load(std::sync::atomic::Ordering::SeqCst) {
+            if STOP.load(std::sync::atomic::Ordering::SeqCst) {
                 break;
             }
             let dir = out.join("runs").join(format!("n{n}-j{t}"));
@@ -249,7 +250,7 @@ pub fn sweep(a: &Args) -> Result<i32> {
             cmd.args(["bench", "--child-scale", &n.to_string(), "--steps"])
                 .arg(steps.to_string())
                 .args(["--threads", &t.to_string()]);
-            let done = compare::supervise(&mut cmd, &dir, "scale", a.time_limit, a.quiet, None)?;
+            let done = external::supervise(&mut cmd, &dir, "scale", a.time_limit, a.quiet, None)?;
             let text = std::fs::read_to_string(dir.join("stdout.log")).unwrap_or_default();
             let parsed = text
                 .lines()
@@ -273,7 +274,7 @@ pub fn sweep(a: &Args) -> Result<i32> {
                         None => format!("killed after the time limit of {} s", a.time_limit),
                         Some(s) => format!(
                             "exited with {s}: {:?}",
-                            compare::failure_line(&dir.join("stderr.log"))
+                            external::failure_line(&dir.join("stderr.log"))
                         ),
                     };
                     eprintln!("  N ≈ {n}, {t} thread(s): {why}; logs in {}", dir.display());
