@@ -21,6 +21,7 @@
 //! * [`paper`]: the published values of `golden/paper-values.toml` (SPEC §6).
 //! * [`reproduction`]: our values over seeds against the published ones, with verdicts.
 //! * [`plots`]: P(f) with the DTS fit, g(r) and generic line plots as SVG + PNG.
+//! * [`stats`]: mean, sample s.d., median/min/max, KS distance, Pareto front.
 //!
 //! ```no_run
 //! use grainbench_comparisons::{analyze, report, Options};
@@ -44,6 +45,7 @@ pub mod rattlers;
 pub mod report;
 pub mod reproduction;
 pub mod series;
+pub mod stats;
 pub mod structure;
 
 #[cfg(test)]

@@ -34,6 +34,7 @@ use crate::external;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::decks::{Code, Start};
 use grainbench_comparisons::metrics::{analyze, Options};
+use grainbench_comparisons::stats::{ks_distance, mean, pareto, sample_sd};
 use grainbench_comparisons::{crosscode::CodeResult, paper, plots};
 use grainbench_engine::run::{RunError, RunOptions, StepEnd};
 use grainbench_engine::scene::{Law, Step};
@@ -399,47 +400,6 @@ pub fn normalized_forces(snap: &Snapshot, opts: &Options) -> Vec<f64> {
     n
 }
 
-/// Two-sample Kolmogorov–Smirnov distance sup_f |F_a(f) − F_b(f)| of two samples; `None`
-/// when one is empty.
-pub fn ks_distance(a: &[f64], b: &[f64]) -> Option<f64> {
-    if a.is_empty() || b.is_empty() {
-        return None;
-    }
-    let mut a = a.to_vec();
-    let mut b = b.to_vec();
-    a.sort_by(f64::total_cmp);
-    b.sort_by(f64::total_cmp);
-    let (na, nb) = (a.len() as f64, b.len() as f64);
-    let (mut i, mut j, mut d) = (0usize, 0usize, 0.0f64);
-    while i < a.len() && j < b.len() {
-        let x = a[i].min(b[j]);
-        while i < a.len() && a[i] <= x {
-            i += 1;
-        }
-        while j < b.len() && b[j] <= x {
-            j += 1;
-        }
-        d = d.max((i as f64 / na - j as f64 / nb).abs());
-    }
-    Some(d)
-}
-
-/// Points not dominated in (cost, error): no other point is at most as costly and at most as
-/// wrong, and strictly better in one. Returns one flag per point; `None` entries are never on
-/// the front.
-pub fn pareto(points: &[Option<(f64, f64)>]) -> Vec<bool> {
-    points
-        .iter()
-        .map(|p| {
-            let Some((c, e)) = *p else { return false };
-            !points
-                .iter()
-                .flatten()
-                .any(|&(c2, e2)| c2 <= c && e2 <= e && (c2 < c || e2 < e))
-        })
-        .collect()
-}
-
 /// One swept point: a code, a knob and its value.
 #[derive(Clone, Debug)]
 struct Point {
@@ -461,16 +421,6 @@ fn metric_of(r: &Record, m: &str) -> Option<f64> {
         "x0" => r.x0,
         _ => None,
     }
-}
-
-fn mean(v: &[f64]) -> Option<f64> {
-    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
-}
-
-fn sample_sd(v: &[f64]) -> Option<f64> {
-    let m = mean(v)?;
-    (v.len() >= 2)
-        .then(|| (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt())
 }
 
 /// One row of the table.
@@ -1312,28 +1262,6 @@ fn write_outputs(out: &Path, base: &Scene, seeds: &[u64], t: &Table, a: &Args) -
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn ks_distance_of_samples() {
-        assert_eq!(ks_distance(&[1.0, 2.0], &[1.0, 2.0]), Some(0.0));
-        assert_eq!(ks_distance(&[1.0, 2.0], &[3.0, 4.0]), Some(1.0));
-        let d = ks_distance(&[1.0, 2.0, 3.0, 4.0], &[2.5]).unwrap();
-        assert!((d - 0.5).abs() < 1e-12);
-        assert_eq!(ks_distance(&[], &[1.0]), None);
-    }
-
-    #[test]
-    fn pareto_front_keeps_undominated_points() {
-        let p = [
-            Some((1.0, 5.0)),
-            Some((2.0, 1.0)),
-            Some((3.0, 2.0)), // dominated by (2, 1)
-            None,
-            Some((0.5, 9.0)),
-            Some((2.0, 1.0)), // equal to a front point: on it too
-        ];
-        assert_eq!(pareto(&p), vec![true, true, false, false, true, true]);
-    }
 
     #[test]
     fn knobs_apply_to_the_scene() {

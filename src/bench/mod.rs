@@ -10,6 +10,7 @@ use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::CodeResult;
 use grainbench_comparisons::decks::{lammps_table, Code, Deck, StageKind, Start, Tolerances};
+use grainbench_comparisons::stats::Stat;
 use grainbench_engine::geometry::{D2, D3};
 use grainbench_engine::run::initial_grains;
 use grainbench_engine::scene::{Criteria, Scene, Step};
@@ -273,42 +274,6 @@ pub struct Run {
     /// max(`wait4` ru_maxrss, sampled sum over the process group), KiB.
     pub peak_rss_kib: Option<u64>,
     pub dir: PathBuf,
-}
-
-/// Median, min and max of a quantity over the repeats.
-#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
-pub struct Stat {
-    pub median: f64,
-    pub min: f64,
-    pub max: f64,
-}
-
-impl Stat {
-    pub fn of(values: &[f64]) -> Option<Stat> {
-        let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-        if v.is_empty() {
-            return None;
-        }
-        v.sort_by(f64::total_cmp);
-        let m = v.len();
-        let median = if m % 2 == 1 {
-            v[m / 2]
-        } else {
-            0.5 * (v[m / 2 - 1] + v[m / 2])
-        };
-        Some(Stat {
-            median,
-            min: v[0],
-            max: v[m - 1],
-        })
-    }
-    fn text(s: Option<Stat>, fmt: impl Fn(f64) -> String) -> String {
-        match s {
-            None => "—".into(),
-            Some(s) if s.min == s.max => fmt(s.median),
-            Some(s) => format!("{} [{}–{}]", fmt(s.median), fmt(s.min), fmt(s.max)),
-        }
-    }
 }
 
 /// One row of the table: a code at a thread count.
@@ -802,6 +767,15 @@ fn rows_of(setups: &[Setup], threads: &[usize], runs: &[Run]) -> Vec<Row> {
     rows
 }
 
+/// `median [min–max]`, or the median alone when they agree.
+fn stat_text(s: Option<Stat>, fmt: impl Fn(f64) -> String) -> String {
+    match s {
+        None => "—".into(),
+        Some(s) if s.min == s.max => fmt(s.median),
+        Some(s) => format!("{} [{}–{}]", fmt(s.median), fmt(s.min), fmt(s.max)),
+    }
+}
+
 fn sig(x: f64) -> String {
     format!("{x:.3e}")
 }
@@ -837,14 +811,14 @@ pub fn to_markdown(r: &Report) -> String {
             row.ran,
             row.runs,
             status,
-            Stat::text(row.steps, fixed(0)),
-            Stat::text(row.wall_seconds, fixed(2)),
-            Stat::text(row.loop_seconds, fixed(2)),
-            Stat::text(row.particle_steps_per_second, sig),
-            Stat::text(row.loop_particle_steps_per_second, sig),
-            Stat::text(row.peak_rss_mib, fixed(1)),
-            Stat::text(row.rate_ratio, fixed(3)),
-            Stat::text(row.wall_ratio, fixed(3)),
+            stat_text(row.steps, fixed(0)),
+            stat_text(row.wall_seconds, fixed(2)),
+            stat_text(row.loop_seconds, fixed(2)),
+            stat_text(row.particle_steps_per_second, sig),
+            stat_text(row.loop_particle_steps_per_second, sig),
+            stat_text(row.peak_rss_mib, fixed(1)),
+            stat_text(row.rate_ratio, fixed(3)),
+            stat_text(row.wall_ratio, fixed(3)),
         );
     }
     s += "\n";
@@ -935,14 +909,6 @@ pub fn to_csv(r: &Report) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn median_min_max() {
-        let s = Stat::of(&[3.0, 1.0, 2.0, f64::NAN]).unwrap();
-        assert_eq!((s.median, s.min, s.max), (2.0, 1.0, 3.0));
-        assert_eq!(Stat::of(&[1.0, 2.0]).unwrap().median, 1.5);
-        assert!(Stat::of(&[]).is_none());
-    }
 
     #[test]
     fn fixed_steps_cuts_to_the_first_dem_stage_and_rounds_up() {

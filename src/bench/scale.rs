@@ -8,11 +8,12 @@
 //! small strain-rate cap (1e-3) so that it stays dense over the timed steps; it is not
 //! equilibrated.
 
-use super::{Args, Stat};
+use super::Args;
 use crate::common::{install_stop_handler, set_threads, STOP};
 use crate::external;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::plots::{line_plot, Axis, LinePlot, Marks, Series};
+use grainbench_comparisons::stats::Stat;
 use grainbench_engine::cell::{Cell, Control};
 use grainbench_engine::contact::slider::Coulomb;
 use grainbench_engine::geometry::{Dim, Linear as _, D3};
