@@ -9,18 +9,18 @@ use crate::external;
 use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::CodeResult;
-use grainbench_comparisons::decks::{lammps_table, Code, Deck, StageKind, Start, Tolerances};
-use grainbench_comparisons::stats::Stat;
-use grainbench_engine::geometry::{D2, D3};
-use grainbench_engine::run::initial_grains;
-use grainbench_engine::scene::{Criteria, Scene, Step};
+use grainbench_comparisons::decks::{lammps_table, Code, Deck, Start};
+use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;
-use serde::Serialize;
+use report::{notes, rows_of, run_line, to_csv, to_markdown, Report, Run};
+use setup::{fixed_steps, from_snapshot, Mode};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::Ordering;
 
+mod report;
 mod scale;
+mod setup;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -91,7 +91,14 @@ pub fn bench(a: &Args) -> Result<i32> {
         if !a.codes.is_empty() && a.codes.iter().any(|c| c != "rust") {
             bail!("--scale runs our engine only (--codes rust)");
         }
-        return scale::sweep(a);
+        return scale::sweep(&scale::Sweep {
+            sizes: &a.scale,
+            threads: &a.threads,
+            steps: a.steps,
+            out: a.out.as_deref(),
+            time_limit: a.time_limit,
+            quiet: a.quiet,
+        });
     }
     let Some(spec) = &a.scene else {
         bail!("give a scene (`grainbench bench xcode-smoke`) or --scale N,…");
@@ -114,209 +121,6 @@ fn child_run(a: &Args) -> Result<i32> {
         checkpoint_every: 1e12,
     };
     Ok(run(&scene, out, &flags)?.0)
-}
-
-/// How the runs stop.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-#[serde(rename_all = "kebab-case", tag = "mode")]
-pub enum Mode {
-    /// The full protocol with its equilibrium criteria.
-    Equilibrium,
-    /// `steps` MD steps of the first DEM stage, criteria off.
-    Steps { steps: u64 },
-}
-
-impl Mode {
-    fn describe(&self) -> String {
-        match self {
-            Mode::Equilibrium => "to equilibrium (full protocol, equilibrium criteria)".into(),
-            Mode::Steps { steps } => format!(
-                "fixed steps: {steps} MD steps of the first DEM stage, criteria evaluated but never met"
-            ),
-        }
-    }
-}
-
-/// The scene cut to its hard-grain prelude and first DEM stage, run for exactly `steps` steps
-/// (criteria that never hold, still evaluated every check period), and its common start.
-/// `steps` is rounded up to a multiple of the check period (LIGGGHTS and our engine run whole
-/// check periods).
-pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
-    let stages = scene.stages();
-    let Some(k) = stages.iter().position(|(_, s)| s.is_dem()) else {
-        bail!(
-            "scene {}: --steps needs a DEM stage (compress, fixed-volume, …) in [[protocol]]",
-            scene.name
-        );
-    };
-    let every = scene.numerics.check_every.max(1);
-    let steps = steps.div_ceil(every) * every;
-    // Never met: positive (the scene validator wants that) and far below any measure.
-    let never = Criteria {
-        force: 1e-200,
-        moment: 1e-200,
-        pressure: 1e-200,
-        kinetic: 1e-200,
-        ..stages[k].1.criteria()
-    };
-    let mut stage = stages[k].1.clone();
-    match &mut stage {
-        Step::Compress { criteria, .. } => *criteria = never.clone(),
-        Step::FixedVolume {
-            criteria,
-            full_time,
-            ..
-        } => {
-            *criteria = never.clone();
-            *full_time = true;
-        }
-        // A fixed cell for S steps: no cluster count to stop on.
-        Step::Aggregate {
-            max_time,
-            mu,
-            kappa,
-        } => {
-            stage = Step::FixedVolume {
-                max_time: *max_time,
-                criteria: never.clone(),
-                full_time: true,
-                mu: *mu,
-                kappa: *kappa,
-            }
-        }
-        other => unreachable!("stages() unrolls {}", other.kind()),
-    }
-    let mut cut = scene.clone();
-    cut.protocol = stages[..k].iter().map(|(_, s)| s.clone()).collect();
-    cut.protocol.push(stage);
-    let mut start = Start::of(&cut).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
-    let dt = start.stages[0].dt;
-    // Half a step below S·dt: the time after S steps passes it whatever the rounding.
-    let max_time = (steps as f64 - 0.5) * dt;
-    match cut.protocol.last_mut() {
-        Some(Step::Compress { max_time: t, .. } | Step::FixedVolume { max_time: t, .. }) => {
-            *t = max_time
-        }
-        _ => unreachable!(),
-    }
-    let st = &mut start.stages[0];
-    st.max_time = max_time;
-    st.max_steps = steps;
-    let pressure = match st.kind {
-        StageKind::Compress { pressure } => Some(pressure),
-        _ => None,
-    };
-    st.tolerances = Tolerances::of(&never, pressure);
-    if let StageKind::FixedVolume { full_time } = &mut st.kind {
-        *full_time = true;
-    }
-    start.scene = cut.clone();
-    Ok((cut, start, steps))
-}
-
-/// The scene started from the grains of `snap` (at rest) without its hard-grain prelude.
-pub fn from_snapshot(scene: &Scene, snap: &Path) -> Result<Scene> {
-    if !snap.is_file() {
-        bail!(
-            "--start {}: no such snapshot file (give a final.snap.json written by `grainbench run` or `analyze --write`)",
-            snap.display()
-        );
-    }
-    let mut s = scene.clone();
-    s.initial.snapshot = Some(std::path::absolute(snap)?);
-    s.protocol = scene
-        .stages()
-        .into_iter()
-        .map(|(_, st)| st)
-        .skip_while(|st| !st.is_dem())
-        .collect();
-    if s.protocol.is_empty() {
-        bail!(
-            "scene {}: --start needs a DEM stage in [[protocol]]",
-            scene.name
-        );
-    }
-    // Read it now: a wrong file or grain count is an error before any run.
-    let read = match s.dimension {
-        2 => initial_grains::<D2>(&s).map(|_| ()),
-        _ => initial_grains::<D3>(&s).map(|_| ()),
-    };
-    read.map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
-    Ok(s)
-}
-
-/// One run of one code.
-#[derive(Clone, Debug, Serialize)]
-pub struct Run {
-    /// Position in the run order (1-based).
-    pub order: usize,
-    pub code: String,
-    pub threads: usize,
-    /// Repeat index (1-based).
-    pub repeat: usize,
-    /// `ran`, `failed`, `timeout`, `interrupted`.
-    pub outcome: String,
-    /// Final status (`equilibrium`, `time-limit`).
-    pub status: Option<String>,
-    pub message: Option<String>,
-    /// MD steps of the DEM stages.
-    pub steps: Option<u64>,
-    /// Wall time of the child process (rust: less its hard-grain prelude, which the external
-    /// decks receive done in their data file).
-    pub wall_seconds: Option<f64>,
-    /// Rust only: wall time of the whole child process, prelude included.
-    pub process_seconds: Option<f64>,
-    /// Time-stepping loop as the code logs it (LAMMPS/LIGGGHTS `Loop time`, YADE's script
-    /// timer, our DEM stages).
-    pub loop_seconds: Option<f64>,
-    pub particle_steps_per_second: Option<f64>,
-    pub loop_particle_steps_per_second: Option<f64>,
-    /// max(`wait4` ru_maxrss, sampled sum over the process group), KiB.
-    pub peak_rss_kib: Option<u64>,
-    pub dir: PathBuf,
-}
-
-/// One row of the table: a code at a thread count.
-#[derive(Clone, Debug, Serialize)]
-pub struct Row {
-    pub code: String,
-    pub threads: usize,
-    /// Runs that ended normally / runs made.
-    pub ran: usize,
-    pub runs: usize,
-    /// `ran`, or why it did not run (`missing`, `refused`, …) with the message.
-    pub outcome: String,
-    pub message: Option<String>,
-    pub version: Option<String>,
-    pub deviations: Vec<String>,
-    /// Final statuses seen (`equilibrium`, `time-limit`).
-    pub statuses: Vec<String>,
-    pub steps: Option<Stat>,
-    pub wall_seconds: Option<Stat>,
-    pub loop_seconds: Option<Stat>,
-    pub particle_steps_per_second: Option<Stat>,
-    pub loop_particle_steps_per_second: Option<Stat>,
-    pub peak_rss_mib: Option<Stat>,
-    /// Rate over our engine's rate in the same repeat and thread count (> 1: faster).
-    pub rate_ratio: Option<Stat>,
-    /// Wall time over our engine's in the same repeat and thread count.
-    pub wall_ratio: Option<Stat>,
-}
-
-/// bench.json.
-#[derive(Clone, Debug, Serialize)]
-pub struct Report {
-    pub scene: String,
-    pub n: usize,
-    pub mode: Mode,
-    pub repeat: usize,
-    pub threads: Vec<usize>,
-    pub command: String,
-    pub notes: Vec<String>,
-    /// `code/-jT/#k` in the order run.
-    pub run_order: Vec<String>,
-    pub rows: Vec<Row>,
-    pub runs: Vec<Run>,
 }
 
 /// A code, its column of results, and its binary and deck (external codes that can run).
@@ -492,7 +296,8 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
             }
         }
     }
-    let rows = rows_of(&setups, &a.threads, &runs);
+    let columns: Vec<(Code, &CodeResult)> = setups.iter().map(|(c, r, _)| (*c, r)).collect();
+    let rows = rows_of(&columns, &a.threads, &runs);
     let report = Report {
         scene: scene.name.clone(),
         n,
@@ -518,50 +323,6 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
     write_atomic(&out.join("bench.md"), md.as_bytes())?;
     eprintln!("wrote {0}/bench.md, bench.csv, bench.json", out.display());
     Ok(if STOP.load(Ordering::SeqCst) { 130 } else { 0 })
-}
-
-fn notes(mode: &Mode, start: Option<&Path>) -> Vec<String> {
-    let mut v = vec![
-        format!("mode: {}", mode.describe()),
-        "particle-steps/s = N × steps / wall; wall is the child process's, so it includes start-up, reading the start and writing the final state; `loop` is the time-stepping loop as each code logs it (LAMMPS/LIGGGHTS `Loop time`, YADE's script timer, our DEM stages)".into(),
-        "rust: its wall time leaves out the hard-grain prelude (event-driven melting) it runs itself, which the external decks receive done in their data file".into(),
-        "codes run alternately (A B C A B C …) so that drift of the machine hits all alike; ratios pair each run with our engine's run of the same repeat and thread count (rate/rust > 1: faster than ours)".into(),
-        "peak RSS: max of wait4 ru_maxrss of the child (its own, or its largest descendant, e.g. one MPI rank) and the sum over its process group sampled every 0.25 s".into(),
-        "threads: rust -j T; LAMMPS/LIGGGHTS run directly for T = 1, under mpirun -np T otherwise; YADE -j T".into(),
-    ];
-    if let Some(snap) = start {
-        v.push(format!(
-            "start: the grains of {} at rest, in every code (hard-grain prelude skipped)",
-            snap.display()
-        ));
-    }
-    if let Mode::Steps { .. } = mode {
-        v.push("fixed steps: the run is the scene's first DEM stage only, with equilibrium criteria set to 1e-200 so that no code stops early; the checks still run every check period, as in a real run".into());
-        if start.is_none() {
-            v.push("fixed steps start from the scene's start, often a gas: the rates are those of that state, not of a dense packing (`--start SNAP`, the equilibrium mode and `--scale` time dense ones)".into());
-        }
-    }
-    v
-}
-
-fn run_line(r: &Run) -> String {
-    let mut s = format!("{} -j{} #{}: {}", r.code, r.threads, r.repeat, r.outcome);
-    if let Some(st) = &r.status {
-        s += &format!(" ({st})");
-    }
-    if let (Some(w), Some(steps)) = (r.wall_seconds, r.steps) {
-        s += &format!(", {steps} steps in {w:.2} s");
-    }
-    if let Some(p) = r.particle_steps_per_second {
-        s += &format!(", {:.3e} particle-steps/s", p);
-    }
-    if let Some(m) = r.peak_rss_kib {
-        s += &format!(", peak RSS {:.1} MiB", m as f64 / 1024.0);
-    }
-    if let Some(m) = &r.message {
-        s += &format!(": {m}");
-    }
-    s
 }
 
 fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut Run) -> Result<()> {
@@ -696,230 +457,4 @@ fn run_external(
         run.wall_seconds = None;
     }
     Ok(())
-}
-
-fn rows_of(setups: &[Setup], threads: &[usize], runs: &[Run]) -> Vec<Row> {
-    let mut rows = Vec::new();
-    for (code, r, _) in setups {
-        for &t in threads {
-            let mine: Vec<&Run> = runs
-                .iter()
-                .filter(|x| x.code == code.name() && x.threads == t)
-                .collect();
-            let ok: Vec<&Run> = mine
-                .iter()
-                .copied()
-                .filter(|x| x.outcome == "ran")
-                .collect();
-            let stat = |f: &dyn Fn(&Run) -> Option<f64>| {
-                Stat::of(&ok.iter().filter_map(|x| f(x)).collect::<Vec<_>>())
-            };
-            let ratio = |f: &dyn Fn(&Run) -> Option<f64>| {
-                let v: Vec<f64> = ok
-                    .iter()
-                    .filter_map(|x| {
-                        let ours = runs.iter().find(|y| {
-                            y.code == "rust"
-                                && y.threads == t
-                                && y.repeat == x.repeat
-                                && y.outcome == "ran"
-                        })?;
-                        Some(f(x)? / f(ours)?)
-                    })
-                    .collect();
-                Stat::of(&v)
-            };
-            let mut statuses: Vec<String> = ok.iter().filter_map(|x| x.status.clone()).collect();
-            statuses.sort();
-            statuses.dedup();
-            let (outcome, message) = if mine.is_empty() {
-                (r.outcome.clone(), r.message.clone())
-            } else if ok.len() == mine.len() {
-                ("ran".to_string(), None)
-            } else {
-                let bad = mine
-                    .iter()
-                    .find(|x| x.outcome != "ran")
-                    .expect("some failed");
-                (bad.outcome.clone(), bad.message.clone())
-            };
-            rows.push(Row {
-                code: code.name().into(),
-                threads: t,
-                ran: ok.len(),
-                runs: mine.len(),
-                outcome,
-                message,
-                version: r.version.clone(),
-                deviations: r.deviations.clone(),
-                statuses,
-                steps: stat(&|x| x.steps.map(|s| s as f64)),
-                wall_seconds: stat(&|x| x.wall_seconds),
-                loop_seconds: stat(&|x| x.loop_seconds),
-                particle_steps_per_second: stat(&|x| x.particle_steps_per_second),
-                loop_particle_steps_per_second: stat(&|x| x.loop_particle_steps_per_second),
-                peak_rss_mib: stat(&|x| x.peak_rss_kib.map(|k| k as f64 / 1024.0)),
-                rate_ratio: ratio(&|x| x.particle_steps_per_second),
-                wall_ratio: ratio(&|x| x.wall_seconds),
-            });
-        }
-    }
-    rows
-}
-
-/// `median [min–max]`, or the median alone when they agree.
-fn stat_text(s: Option<Stat>, fmt: impl Fn(f64) -> String) -> String {
-    match s {
-        None => "—".into(),
-        Some(s) if s.min == s.max => fmt(s.median),
-        Some(s) => format!("{} [{}–{}]", fmt(s.median), fmt(s.min), fmt(s.max)),
-    }
-}
-
-fn sig(x: f64) -> String {
-    format!("{x:.3e}")
-}
-
-fn fixed(d: usize) -> impl Fn(f64) -> String {
-    move |x| format!("{x:.d$}")
-}
-
-/// The Markdown table with its notes.
-pub fn to_markdown(r: &Report) -> String {
-    let mut s = format!(
-        "## grainbench bench: {} (N = {}), {}\n\n",
-        r.scene,
-        r.n,
-        r.mode.describe()
-    );
-    s += &format!(
-        "Medians over {} repeat(s), [min–max] where they differ.\n\n",
-        r.repeat
-    );
-    s += "| code | threads | runs | status | steps | wall s | loop s | particle-steps/s (wall) | particle-steps/s (loop) | peak RSS MiB | rate / rust | wall / rust |\n";
-    s += "| --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
-    for row in &r.rows {
-        let status = if row.outcome == "ran" {
-            row.statuses.join(", ")
-        } else {
-            row.outcome.clone()
-        };
-        s += &format!(
-            "| {} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            row.code,
-            row.threads,
-            row.ran,
-            row.runs,
-            status,
-            stat_text(row.steps, fixed(0)),
-            stat_text(row.wall_seconds, fixed(2)),
-            stat_text(row.loop_seconds, fixed(2)),
-            stat_text(row.particle_steps_per_second, sig),
-            stat_text(row.loop_particle_steps_per_second, sig),
-            stat_text(row.peak_rss_mib, fixed(1)),
-            stat_text(row.rate_ratio, fixed(3)),
-            stat_text(row.wall_ratio, fixed(3)),
-        );
-    }
-    s += "\n";
-    for row in r.rows.iter().filter(|x| x.outcome != "ran") {
-        if let Some(m) = &row.message {
-            s += &format!("- {} -j{}: {}: {m}\n", row.code, row.threads, row.outcome);
-        }
-    }
-    let mut seen = Vec::new();
-    for row in &r.rows {
-        if let Some(v) = &row.version {
-            if !seen.contains(&row.code) {
-                seen.push(row.code.clone());
-                s += &format!("- {}: {v}", row.code);
-                if !row.deviations.is_empty() {
-                    // The feature keys; bench.json has the deviations in full.
-                    let keys: Vec<&str> = row
-                        .deviations
-                        .iter()
-                        .map(|d| d.split(':').next().unwrap_or(d))
-                        .collect();
-                    s += &format!(" (approximate: {})", keys.join(", "));
-                }
-                s += "\n";
-            }
-        }
-    }
-    for n in &r.notes {
-        s += &format!("- {n}\n");
-    }
-    s += &format!("- run order: {}\n", r.run_order.join(" "));
-    s
-}
-
-/// bench.csv: one line per code and thread count, median/min/max columns.
-pub fn to_csv(r: &Report) -> String {
-    let quantities = [
-        "steps",
-        "wall_seconds",
-        "loop_seconds",
-        "particle_steps_per_second",
-        "loop_particle_steps_per_second",
-        "peak_rss_mib",
-        "rate_ratio",
-        "wall_ratio",
-    ];
-    let mut s = String::from("scene,n,mode,code,threads,runs,ran,outcome,status");
-    for q in quantities {
-        s += &format!(",{q}_median,{q}_min,{q}_max");
-    }
-    s += "\n";
-    let mode = match r.mode {
-        Mode::Equilibrium => "equilibrium".to_string(),
-        Mode::Steps { steps } => format!("steps={steps}"),
-    };
-    for row in &r.rows {
-        s += &format!(
-            "{},{},{mode},{},{},{},{},{},{}",
-            r.scene,
-            r.n,
-            row.code,
-            row.threads,
-            row.runs,
-            row.ran,
-            row.outcome,
-            row.statuses.join(";")
-        );
-        for st in [
-            row.steps,
-            row.wall_seconds,
-            row.loop_seconds,
-            row.particle_steps_per_second,
-            row.loop_particle_steps_per_second,
-            row.peak_rss_mib,
-            row.rate_ratio,
-            row.wall_ratio,
-        ] {
-            match st {
-                Some(x) => s += &format!(",{},{},{}", x.median, x.min, x.max),
-                None => s += ",,,",
-            }
-        }
-        s += "\n";
-    }
-    s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn fixed_steps_cuts_to_the_first_dem_stage_and_rounds_up() {
-        let scene = load_scene("xcode-smoke").unwrap();
-        let (cut, start, steps) = fixed_steps(&scene, 250).unwrap();
-        assert_eq!(steps, 400);
-        assert_eq!(start.stages.len(), 1);
-        assert_eq!(start.stages[0].max_steps, 400);
-        assert_eq!(cut.protocol.len(), 2);
-        let text = toml::to_string(&cut).unwrap();
-        let back = Scene::from_toml(&text, Path::new("x.toml")).unwrap();
-        assert_eq!(back, cut);
-    }
 }

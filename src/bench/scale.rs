@@ -8,7 +8,6 @@
 //! small strain-rate cap (1e-3) so that it stays dense over the timed steps; it is not
 //! equilibrated.
 
-use super::Args;
 use crate::common::{install_stop_handler, set_threads, STOP};
 use crate::external;
 use anyhow::{bail, Context, Result};
@@ -220,25 +219,36 @@ pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
     Ok(0)
 }
 
+/// What `bench --scale` was asked for.
+pub struct Sweep<'a> {
+    /// Particle counts wanted.
+    pub sizes: &'a [usize],
+    pub threads: &'a [usize],
+    /// Steps timed per size (default [`DEFAULT_STEPS`]).
+    pub steps: Option<u64>,
+    /// Output directory (default `runs/bench/scale`).
+    pub out: Option<&'a Path>,
+    /// Wall-time limit of each child, seconds.
+    pub time_limit: f64,
+    pub quiet: bool,
+}
+
 /// `grainbench bench --scale …`.
-pub fn sweep(a: &Args) -> Result<i32> {
-    if a.scale.iter().any(|&n| n < 32) {
+pub fn sweep(a: &Sweep) -> Result<i32> {
+    if a.sizes.iter().any(|&n| n < 32) {
         bail!("--scale: sizes must be at least 32 particles");
     }
     let steps = a.steps.unwrap_or(DEFAULT_STEPS);
-    let out = a
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("runs/bench/scale").into());
-    std::fs::create_dir_all(&out)
+    let out = a.out.unwrap_or(Path::new("runs/bench/scale"));
+    std::fs::create_dir_all(out)
         .with_context(|| format!("creating the output directory {}", out.display()))?;
-    let out = std::path::absolute(&out)?;
+    let out = std::path::absolute(out)?;
     install_stop_handler();
     let exe = std::env::current_exe().context("locating the grainbench executable")?;
     let mut points: Vec<Point> = Vec::new();
     let mut failures = Vec::new();
-    for &n in &a.scale {
-        for &t in &a.threads {
+    for &n in a.sizes {
+        for &t in a.threads {
             if STOP.load(std::sync::atomic::Ordering::SeqCst) {
                 break;
             }
