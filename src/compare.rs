@@ -11,6 +11,7 @@ use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::{self, Bands, CodeResult, Comparison};
 use grainbench_comparisons::decks::{self, Code, StageKind, Start};
 use grainbench_comparisons::metrics::Analysis;
+use grainbench_comparisons::outcome::Outcome;
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -70,7 +71,7 @@ pub fn compare(a: &Args) -> Result<i32> {
             golden: crosscode::golden_metrics(Path::new("."), &scene.name, code.name()),
             pressure_target: p_target,
             pressure_tolerance: p_tol,
-            ..CodeResult::new(code.name(), "ran")
+            ..CodeResult::new(code, Outcome::Ran)
         };
         let snap = match code {
             Code::Rust => run_rust(&scene, &dir, a.quiet, &mut r)?,
@@ -154,11 +155,11 @@ fn run_rust(
     match outcome {
         Some(o) if code == 0 => Ok(Some(o.snapshot)),
         Some(o) => {
-            r.outcome = "interrupted".into();
+            r.outcome = Outcome::Interrupted;
             Ok(Some(o.snapshot))
         }
         None => {
-            r.outcome = "failed".into();
+            r.outcome = Outcome::Failed;
             r.message = Some(format!("grainbench run exited with status {code}"));
             Ok(None)
         }
@@ -208,10 +209,10 @@ pub fn golden_update(
     };
     let mut written = 0;
     for c in &cmp.codes {
-        if !wanted.is_empty() && !wanted.iter().any(|w| w.name() == c.code) {
+        if !wanted.is_empty() && !wanted.contains(&c.code) {
             continue;
         }
-        if c.outcome != "ran" {
+        if c.outcome != Outcome::Ran {
             eprintln!("{}: not recorded ({})", c.code, c.outcome);
             continue;
         }
@@ -271,7 +272,7 @@ pub fn golden_show(scene: &str, all_metrics: bool) -> Result<i32> {
     let start = Start::of(&scene).ok();
     let mut codes = Vec::new();
     for c in Code::ALL {
-        if let Some(r) = crosscode::recorded(Path::new("."), &scene.name, c.name()) {
+        if let Some(r) = crosscode::recorded(Path::new("."), &scene.name, c) {
             codes.push(r);
             continue;
         }
@@ -280,12 +281,12 @@ pub fn golden_show(scene: &str, all_metrics: bool) -> Result<i32> {
             if let Err(refusal) = decks::deck(st, c) {
                 codes.push(CodeResult {
                     message: Some(refusal.to_string()),
-                    ..CodeResult::new(c.name(), "refused")
+                    ..CodeResult::new(c, Outcome::Refused)
                 });
             }
         }
     }
-    if codes.iter().all(|c| c.outcome != "recorded") {
+    if codes.iter().all(|c| c.outcome != Outcome::Recorded) {
         bail!(
             "no golden/{}/<code>.json recorded; run `grainbench compare {0}` and `grainbench golden update {0}`",
             scene.name
@@ -299,7 +300,7 @@ pub fn golden_show(scene: &str, all_metrics: bool) -> Result<i32> {
         &Bands::embedded(),
     );
     print!("{}", cmp.to_markdown(all_metrics));
-    for c in cmp.codes.iter().filter(|c| c.outcome == "recorded") {
+    for c in cmp.codes.iter().filter(|c| c.outcome == Outcome::Recorded) {
         println!("{}: `{}`", c.code, c.message.as_deref().unwrap_or(""));
     }
     Ok(0)

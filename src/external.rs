@@ -10,6 +10,7 @@ use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::CodeResult;
 use grainbench_comparisons::decks::{self, Code, Start};
 use grainbench_comparisons::import::{self, Meta};
+use grainbench_comparisons::outcome::Outcome;
 use grainbench_engine::snapshot::Snapshot;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -49,7 +50,7 @@ pub fn run(
 /// scene refused).
 pub fn prepare(start: &Start, code: Code, r: &mut CodeResult) -> Option<(PathBuf, decks::Deck)> {
     let Some(binary) = code.find() else {
-        r.outcome = "missing".into();
+        r.outcome = Outcome::Missing;
         r.message = Some(format!(
             "`{}` not found on PATH; install with `{}` (or `bash ci/install-externals.sh`)",
             code.binary(),
@@ -63,7 +64,7 @@ pub fn prepare(start: &Start, code: Code, r: &mut CodeResult) -> Option<(PathBuf
             Some((binary, d))
         }
         Err(refusal) => {
-            r.outcome = "refused".into();
+            r.outcome = Outcome::Refused;
             r.message = Some(refusal.to_string());
             None
         }
@@ -294,19 +295,19 @@ pub fn finish(
     let logs = format!("logs in {}", dir.display());
     match done.status {
         None if STOP.load(Ordering::SeqCst) => {
-            r.outcome = "interrupted".into();
+            r.outcome = Outcome::Interrupted;
             r.message = Some(logs);
             return Ok(None);
         }
         None => {
-            r.outcome = "timeout".into();
+            r.outcome = Outcome::Timeout;
             r.message = Some(format!(
                 "killed after the time limit of {time_limit} s (--time-limit); {logs}"
             ));
             return Ok(None);
         }
         Some(s) if !s.success() => {
-            r.outcome = "failed".into();
+            r.outcome = Outcome::Failed;
             r.message = Some(format!(
                 "exited with {s}; last output: {:?}; {logs}",
                 last_line(&dir.join("stderr.log"))
@@ -325,7 +326,7 @@ pub fn finish(
             Ok(Some(snap))
         }
         Err(e) => {
-            r.outcome = "failed".into();
+            r.outcome = Outcome::Failed;
             r.message = Some(format!("reading its final state: {e}; {logs}"));
             Ok(None)
         }

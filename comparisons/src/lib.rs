@@ -18,6 +18,7 @@
 //! * [`metrics`]: [`analyze`], [`Options`], [`Analysis`], [`Analysis::metric_values`].
 //! * [`report`]: markdown table and JSON renderings.
 //! * [`series`]: the data series returned for plots.
+//! * [`outcome`]: how the run of one code ended (`ran`, `missing`, `timeout`, …).
 //! * [`paper`]: the published values of `golden/paper-values.toml` (SPEC §6).
 //! * [`reproduction`]: our values over seeds against the published ones, with verdicts.
 //! * [`plots`]: P(f) with the DTS fit, g(r) and generic line plots as SVG + PNG.
@@ -39,6 +40,7 @@ pub mod force_distribution;
 pub mod import;
 pub mod metrics;
 mod neighbors;
+pub mod outcome;
 pub mod paper;
 pub mod plots;
 pub mod rattlers;

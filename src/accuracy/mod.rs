@@ -34,6 +34,7 @@ use crate::external;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::CodeResult;
 use grainbench_comparisons::decks::{Code, Start};
+use grainbench_comparisons::outcome::Outcome;
 use grainbench_engine::run::{RunError, RunOptions, StepEnd};
 use grainbench_engine::snapshot::write_atomic;
 use grainbench_engine::Scene;
@@ -208,7 +209,7 @@ pub fn accuracy(a: &Args) -> Result<i32> {
     install_stop_handler();
 
     // Run every distinct (code, settings, seed) once, cached on disk.
-    let mut records: BTreeMap<(String, String, u64), Record> = BTreeMap::new();
+    let mut records: BTreeMap<(Code, String, u64), Record> = BTreeMap::new();
     let total = {
         let mut keys: Vec<(Code, String)> =
             points.iter().map(|p| (p.code, p.settings.key())).collect();
@@ -219,7 +220,7 @@ pub fn accuracy(a: &Args) -> Result<i32> {
     let mut done = 0;
     for p in &points {
         for &seed in &a.seeds {
-            let key = (p.code.name().to_string(), p.settings.key(), seed);
+            let key = (p.code, p.settings.key(), seed);
             if records.contains_key(&key) {
                 continue;
             }
@@ -243,7 +244,7 @@ pub fn accuracy(a: &Args) -> Result<i32> {
                     "accuracy [{done}/{total}] {} {} seed {seed}: {} ({:.1} s, {} steps){}",
                     p.code.name(),
                     p.settings.label(),
-                    r.status,
+                    r.status(),
                     r.wall_seconds,
                     r.steps,
                     r.message
@@ -277,9 +278,10 @@ fn run_point(scene: &Scene, code: Code, dir: &Path, seed: u64, a: &Args) -> Resu
         }
     }
     let mut r = Record {
-        code: code.name().into(),
+        code,
         seed,
-        status: String::new(),
+        outcome: Outcome::Ran,
+        state: None,
         message: None,
         wall_seconds: 0.0,
         steps: 0,
@@ -290,7 +292,7 @@ fn run_point(scene: &Scene, code: Code, dir: &Path, seed: u64, a: &Args) -> Resu
     };
     // The scene validation refuses some values (dt_fraction > 0.5): a refused point, not a run.
     if let Err(e) = scene.validate(Path::new(&format!("<accuracy:{}>", scene.name))) {
-        r.status = "invalid".into();
+        r.outcome = Outcome::Invalid;
         r.message = Some(e.to_string());
     } else if code == Code::Rust {
         run_rust(scene, &mut r)?;
@@ -327,11 +329,7 @@ fn run_rust(scene: &Scene, r: &mut Record) -> Result<()> {
                 .filter(|s| s.end != StepEnd::Done)
                 .map(|s| s.steps)
                 .sum();
-            r.status = if o.snapshot.status == "equilibrium" {
-                "equilibrium".into()
-            } else {
-                o.snapshot.status.clone()
-            };
+            r.state = Some(o.snapshot.status.clone());
             let (phi, z, x0, f) = measure(&o.snapshot);
             (r.phi, r.z_star, r.x0, r.forces) = (phi, z, x0, f);
         }
@@ -339,11 +337,11 @@ fn run_rust(scene: &Scene, r: &mut Record) -> Result<()> {
             if let RunError::Unstable { step, .. } = &e {
                 r.steps = *step;
             }
-            r.status = "unstable".into();
+            r.outcome = Outcome::Unstable;
             r.message = Some(e.to_string());
         }
         Err(e) => {
-            r.status = "failed".into();
+            r.outcome = Outcome::Failed;
             r.message = Some(e.to_string());
         }
     }
@@ -353,13 +351,13 @@ fn run_rust(scene: &Scene, r: &mut Record) -> Result<()> {
 /// LAMMPS from the same start (compare's machinery); only the dt knob reaches its deck.
 fn run_external(scene: &Scene, code: Code, dir: &Path, a: &Args, r: &mut Record) -> Result<()> {
     let start = Start::of(scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
-    let mut cr = CodeResult::new(code.name(), "ok");
+    let mut cr = CodeResult::new(code, Outcome::Ran);
     let work = dir.join("work");
     let snap = external::run(&start, code, &work, a.time_limit, None, true, &mut cr)?;
     r.wall_seconds = cr.wall_seconds.unwrap_or(0.0);
     match snap {
         Some(s) => {
-            r.status = "time-limit".into();
+            r.state = Some("time-limit".into());
             r.message = Some(format!(
                 "{} runs the deck's fixed number of steps (no equilibrium criteria)",
                 code.name()
@@ -382,11 +380,7 @@ fn run_external(scene: &Scene, code: Code, dir: &Path, a: &Args, r: &mut Record)
             let blown = error
                 .as_deref()
                 .is_some_and(|e| e.contains("Lost atoms") || e.contains("Out of range"));
-            r.status = if blown {
-                "unstable".into()
-            } else {
-                cr.outcome.clone()
-            };
+            r.outcome = if blown { Outcome::Unstable } else { cr.outcome };
             r.message = Some(match (error, &cr.message) {
                 (Some(e), Some(m)) => format!(
                     "{e} (numerics.dt_fraction = {}); {m}",

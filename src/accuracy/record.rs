@@ -1,18 +1,22 @@
 //! What one run of one point and seed gave, as cached in `runs/<code>/<settings>/seed-S.json`,
 //! and the measures taken on its final packing.
 
+use grainbench_comparisons::decks::Code;
 use grainbench_comparisons::metrics::{analyze, Options};
+use grainbench_comparisons::outcome::Outcome;
 use grainbench_engine::snapshot::Snapshot;
 use serde_json::{json, Value};
 
 /// What one run of one point and seed gave.
 #[derive(Clone, Debug)]
 pub struct Record {
-    pub code: String,
+    pub code: Code,
     pub seed: u64,
-    /// `equilibrium`, `time-limit`, `unstable`, `invalid` (refused by the scene validation)
-    /// or `failed`.
-    pub status: String,
+    /// `ran` (its final state in `state`), `unstable`, `invalid` (refused by the scene
+    /// validation), `failed`, or why an external code did not run.
+    pub outcome: Outcome,
+    /// The final state of a run that ran: `equilibrium`, `time-limit`.
+    pub state: Option<String>,
     pub message: Option<String>,
     pub wall_seconds: f64,
     /// DEM time steps (hard-sphere collisions not counted).
@@ -27,7 +31,15 @@ pub struct Record {
 impl Record {
     /// Did the run end with a packing to measure (`equilibrium` or `time-limit`)?
     pub fn packing(&self) -> bool {
-        matches!(self.status.as_str(), "equilibrium" | "time-limit")
+        matches!(self.status(), "equilibrium" | "time-limit")
+    }
+
+    /// The final state of a run that ran, else its outcome (`unstable`, `failed`, …).
+    pub fn status(&self) -> &str {
+        match (self.outcome, &self.state) {
+            (Outcome::Ran, Some(s)) => s,
+            (o, _) => o.as_str(),
+        }
     }
 
     /// The cache file's document; `scene_json` tells whether a later sweep ran the same scene.
@@ -35,7 +47,7 @@ impl Record {
         json!({
             "code": self.code,
             "seed": self.seed,
-            "status": self.status,
+            "status": self.status(),
             "message": self.message,
             "wall_seconds": self.wall_seconds,
             "steps": self.steps,
@@ -50,10 +62,16 @@ impl Record {
     /// Reads a cached record back.
     pub fn from_json(v: &Value) -> Option<Record> {
         let f = |k: &str| v.get(k).and_then(Value::as_f64);
+        let status = v.get("status")?.as_str()?;
+        let (outcome, state) = match Outcome::parse(status) {
+            Some(o) if o != Outcome::Ran => (o, None),
+            _ => (Outcome::Ran, Some(status.to_string())),
+        };
         Some(Record {
-            code: v.get("code")?.as_str()?.to_string(),
+            code: Code::parse(v.get("code")?.as_str()?)?,
             seed: v.get("seed")?.as_u64()?,
-            status: v.get("status")?.as_str()?.to_string(),
+            outcome,
+            state,
             message: v.get("message").and_then(Value::as_str).map(String::from),
             wall_seconds: f("wall_seconds")?,
             steps: v.get("steps")?.as_u64()?,

@@ -63,13 +63,13 @@ pub struct ReferenceStats {
 pub fn build_table(
     base: &Scene,
     points: &[Point],
-    records: &BTreeMap<(String, String, u64), Record>,
+    records: &BTreeMap<(Code, String, u64), Record>,
     seeds: &[u64],
 ) -> Table {
     let recs = |p: &Point| -> Vec<&Record> {
         seeds
             .iter()
-            .filter_map(|&s| records.get(&(p.code.name().to_string(), p.settings.key(), s)))
+            .filter_map(|&s| records.get(&(p.code, p.settings.key(), s)))
             .collect()
     };
     let paper_state = base.paper_state.clone();
@@ -229,17 +229,17 @@ pub fn point_status(rr: &[&Record], seeds: usize) -> String {
         };
         return format!(
             "{}{of}: {}",
-            bad.status,
+            bad.status(),
             short_message(bad.message.as_deref().unwrap_or("no message"))
         );
     }
     if rr.len() < seeds {
         return "missing".into();
     }
-    if rr.iter().all(|r| r.status == "equilibrium") {
+    if rr.iter().all(|r| r.status() == "equilibrium") {
         "equilibrium".into()
     } else {
-        let k = rr.iter().filter(|r| r.status != "equilibrium").count();
+        let k = rr.iter().filter(|r| r.status() != "equilibrium").count();
         format!("time-limit ({k}/{seeds} seeds)")
     }
 }

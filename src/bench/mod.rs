@@ -10,6 +10,7 @@ use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::crosscode::CodeResult;
 use grainbench_comparisons::decks::{lammps_table, Code, Deck, Start};
+use grainbench_comparisons::outcome::Outcome;
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;
 use report::{notes, rows_of, run_line, to_csv, to_markdown, Report, Run};
@@ -182,7 +183,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
     // Decks and binaries once; codes that cannot run are rows without runs.
     let mut setups: Vec<Setup> = Vec::new();
     for &code in &codes {
-        let mut r = CodeResult::new(code.name(), "ran");
+        let mut r = CodeResult::new(code, Outcome::Ran);
         let ready = match (code, &start) {
             (Code::Rust, _) => {
                 r.version = Some(format!("grainbench {}", env!("CARGO_PKG_VERSION")));
@@ -194,14 +195,14 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
         let ready = match (ready, code, mode, &start) {
             // Adhesion: the bench-only LAMMPS deck (throughput only).
             (None, Code::Lammps, Mode::Steps { .. }, Some(st))
-                if r.outcome == "refused" && st.cohesive() =>
+                if r.outcome == Outcome::Refused && st.cohesive() =>
             {
                 match (
                     Code::Lammps.find(),
                     lammps_table::deck(st, lammps_table::CLASSES),
                 ) {
                     (Some(bin), Ok(deck)) => {
-                        r.outcome = "ran".into();
+                        r.outcome = Outcome::Ran;
                         r.message = None;
                         r.deviations = deck.deviations.clone();
                         eprintln!(
@@ -229,7 +230,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
             && grainbench_comparisons::decks::which("mpirun").is_none()
             && ready.is_some()
         {
-            r.outcome = "missing".into();
+            r.outcome = Outcome::Missing;
             r.message = Some("`mpirun` not found on PATH (needed for threads > 1); install with `apt-get install -y --no-install-recommends openmpi-bin`".into());
             eprintln!(
                 "{:<9} missing: {}",
@@ -261,10 +262,10 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
                 let order = runs.len() + 1;
                 let mut run = Run {
                     order,
-                    code: code.name().into(),
+                    code: *code,
                     threads: t,
                     repeat: rep,
-                    outcome: "ran".into(),
+                    outcome: Outcome::Ran,
                     status: None,
                     message: None,
                     steps: None,
@@ -351,11 +352,10 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
     match done.status {
         None => {
             run.outcome = if STOP.load(Ordering::SeqCst) {
-                "interrupted"
+                Outcome::Interrupted
             } else {
-                "timeout"
-            }
-            .into();
+                Outcome::Timeout
+            };
             run.message = Some(format!(
                 "stopped at the time limit of {} s (--time-limit); logs in {}",
                 a.time_limit,
@@ -364,7 +364,7 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
             return Ok(());
         }
         Some(s) if !s.success() => {
-            run.outcome = "failed".into();
+            run.outcome = Outcome::Failed;
             run.message = Some(format!(
                 "exited with {s}: {:?}; logs in {}",
                 external::failure_line(&dir.join("stderr.log")),
@@ -433,7 +433,7 @@ fn run_external(
         run.steps = external::log_steps(dir);
         run.loop_seconds = external::loop_time(code, dir);
         if run.steps.is_none() {
-            run.outcome = "failed".into();
+            run.outcome = Outcome::Failed;
             run.message = Some(format!(
                 "no `Loop time` line in {}/stdout.log",
                 dir.display()
@@ -442,7 +442,7 @@ fn run_external(
         }
         return Ok(());
     }
-    let mut res = CodeResult::new(code.name(), "ran");
+    let mut res = CodeResult::new(code, Outcome::Ran);
     let snap = external::finish(code, dir, &done, a.time_limit, &mut res)?;
     if r.version.is_none() {
         r.version = res.version.clone();

@@ -4,6 +4,7 @@
 use super::setup::Mode;
 use grainbench_comparisons::crosscode::CodeResult;
 use grainbench_comparisons::decks::Code;
+use grainbench_comparisons::outcome::Outcome;
 use grainbench_comparisons::stats::Stat;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -13,12 +14,12 @@ use std::path::{Path, PathBuf};
 pub struct Run {
     /// Position in the run order (1-based).
     pub order: usize,
-    pub code: String,
+    pub code: Code,
     pub threads: usize,
     /// Repeat index (1-based).
     pub repeat: usize,
     /// `ran`, `failed`, `timeout`, `interrupted`.
-    pub outcome: String,
+    pub outcome: Outcome,
     /// Final status (`equilibrium`, `time-limit`).
     pub status: Option<String>,
     pub message: Option<String>,
@@ -42,13 +43,13 @@ pub struct Run {
 /// One row of the table: a code at a thread count.
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
-    pub code: String,
+    pub code: Code,
     pub threads: usize,
     /// Runs that ended normally / runs made.
     pub ran: usize,
     pub runs: usize,
     /// `ran`, or why it did not run (`missing`, `refused`, …) with the message.
-    pub outcome: String,
+    pub outcome: Outcome,
     pub message: Option<String>,
     pub version: Option<String>,
     pub deviations: Vec<String>,
@@ -135,12 +136,12 @@ pub fn rows_of(columns: &[(Code, &CodeResult)], threads: &[usize], runs: &[Run])
         for &t in threads {
             let mine: Vec<&Run> = runs
                 .iter()
-                .filter(|x| x.code == code.name() && x.threads == t)
+                .filter(|x| x.code == *code && x.threads == t)
                 .collect();
             let ok: Vec<&Run> = mine
                 .iter()
                 .copied()
-                .filter(|x| x.outcome == "ran")
+                .filter(|x| x.outcome == Outcome::Ran)
                 .collect();
             let stat = |f: &dyn Fn(&Run) -> Option<f64>| {
                 Stat::of(&ok.iter().filter_map(|x| f(x)).collect::<Vec<_>>())
@@ -150,10 +151,10 @@ pub fn rows_of(columns: &[(Code, &CodeResult)], threads: &[usize], runs: &[Run])
                     .iter()
                     .filter_map(|x| {
                         let ours = runs.iter().find(|y| {
-                            y.code == "rust"
+                            y.code == Code::Rust
                                 && y.threads == t
                                 && y.repeat == x.repeat
-                                && y.outcome == "ran"
+                                && y.outcome == Outcome::Ran
                         })?;
                         Some(f(x)? / f(ours)?)
                     })
@@ -164,18 +165,18 @@ pub fn rows_of(columns: &[(Code, &CodeResult)], threads: &[usize], runs: &[Run])
             statuses.sort();
             statuses.dedup();
             let (outcome, message) = if mine.is_empty() {
-                (r.outcome.clone(), r.message.clone())
+                (r.outcome, r.message.clone())
             } else if ok.len() == mine.len() {
-                ("ran".to_string(), None)
+                (Outcome::Ran, None)
             } else {
                 let bad = mine
                     .iter()
-                    .find(|x| x.outcome != "ran")
+                    .find(|x| x.outcome != Outcome::Ran)
                     .expect("some failed");
-                (bad.outcome.clone(), bad.message.clone())
+                (bad.outcome, bad.message.clone())
             };
             rows.push(Row {
-                code: code.name().into(),
+                code: *code,
                 threads: t,
                 ran: ok.len(),
                 runs: mine.len(),
@@ -230,10 +231,10 @@ pub fn to_markdown(r: &Report) -> String {
     s += "| code | threads | runs | status | steps | wall s | loop s | particle-steps/s (wall) | particle-steps/s (loop) | peak RSS MiB | rate / rust | wall / rust |\n";
     s += "| --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
     for row in &r.rows {
-        let status = if row.outcome == "ran" {
+        let status = if row.outcome == Outcome::Ran {
             row.statuses.join(", ")
         } else {
-            row.outcome.clone()
+            row.outcome.to_string()
         };
         s += &format!(
             "| {} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
@@ -253,7 +254,7 @@ pub fn to_markdown(r: &Report) -> String {
         );
     }
     s += "\n";
-    for row in r.rows.iter().filter(|x| x.outcome != "ran") {
+    for row in r.rows.iter().filter(|x| x.outcome != Outcome::Ran) {
         if let Some(m) = &row.message {
             s += &format!("- {} -j{}: {}: {m}\n", row.code, row.threads, row.outcome);
         }
@@ -262,7 +263,7 @@ pub fn to_markdown(r: &Report) -> String {
     for row in &r.rows {
         if let Some(v) = &row.version {
             if !seen.contains(&row.code) {
-                seen.push(row.code.clone());
+                seen.push(row.code);
                 s += &format!("- {}: {v}", row.code);
                 if !row.deviations.is_empty() {
                     // The feature keys; bench.json has the deviations in full.
