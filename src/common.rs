@@ -23,6 +23,7 @@ pub fn install_stop_handler() {
     });
 }
 
+/// Sizes the global rayon pool (default: all cores).
 pub fn set_threads(threads: Option<usize>) -> Result<()> {
     if let Some(t) = threads {
         rayon::ThreadPoolBuilder::new()
