@@ -1,23 +1,25 @@
 //! `grainbench`: run DEM scenes, analyze packings.
 
-use anyhow::{bail, Context, Result};
+//!
+//! Only the command line and its dispatch live here; each command is a module, and the
+//! pieces several commands share are in [`common`] (stop flag, threads, scenes, analysis),
+//! [`run`] (one run of our engine) and [`external`] (an external code as a child process).
+
+use anyhow::Result;
 use clap::{Parser, Subcommand};
-use grainbench_engine::checkpoint::Checkpoint;
-use grainbench_engine::run::{CheckpointSpec, Outcome, Progress, RunError, RunOptions};
-use grainbench_engine::{library, snapshot, Scene, Snapshot};
-use indicatif::{ProgressBar, ProgressStyle};
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use common::{install_stop_handler, set_threads};
+use run::RunFlags;
+use std::path::PathBuf;
 
 mod accuracy;
+mod analyze;
 mod bench;
+mod common;
 mod compare;
+mod external;
 mod reproduce;
-mod scale;
+mod run;
 mod xcode;
-
-/// Set by the first Ctrl-C (or SIGTERM): runs stop cleanly at their next check.
-static STOP: AtomicBool = AtomicBool::new(false);
 
 #[derive(Parser)]
 #[command(
@@ -271,25 +273,14 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 resume,
                 checkpoint_every,
             };
-            let (mut scene, out) = scene_and_out(scene.as_deref(), out, resume)?;
-            if let Some(s) = seed {
-                scene.seed = s;
-            }
-            let (code, outcome) = run(&scene, &out, &flags)?;
-            if let Some(o) = outcome {
-                if code == 0 && require_equilibrium && !o.equilibrated() {
-                    eprintln!("not every step reached equilibrium (--require-equilibrium)");
-                    return Ok(3);
-                }
-            }
-            Ok(code)
+            run::run_command(scene.as_deref(), out, seed, require_equilibrium, &flags)
         }
         Command::Analyze {
             snapshot,
             json,
             from,
             write,
-        } => analyze(&snapshot, json, from.as_deref(), write.as_deref()),
+        } => analyze::analyze(&snapshot, json, from.as_deref(), write.as_deref()),
         Command::Reproduce {
             paper,
             state,
@@ -327,358 +318,9 @@ fn dispatch(cli: Cli) -> Result<i32> {
         } => xcode::decks_command(&scenes, all, &codes, out),
         Command::Capabilities { scene } => xcode::capabilities_command(scene.as_deref()),
         Command::Bench(args) => bench::bench(&args),
-        Command::Scenes => {
-            for (name, text) in library::SCENES {
-                let scene = Scene::from_toml(text, Path::new(name))?;
-                println!(
-                    "{name:<24} {}D N={:<6} {}",
-                    scene.dimension, scene.particles.count, scene.description
-                );
-            }
-            Ok(0)
-        }
-    }
-}
-
-/// Loads a scene from a file, or an embedded one by name.
-pub(crate) fn load_scene(spec: &str) -> Result<Scene> {
-    let path = Path::new(spec);
-    if path.is_file() || (path.exists() && library::scene_text(spec).is_none()) {
-        return Ok(Scene::from_file(path)?);
-    }
-    if let Some(text) = library::scene_text(spec) {
-        return Ok(Scene::from_toml(
-            text,
-            Path::new(&format!("<embedded:{spec}>")),
-        )?);
-    }
-    let names: Vec<&str> = library::SCENES.iter().map(|(n, _)| *n).collect();
-    bail!(
-        "no scene file {spec:?} and no embedded scene of that name (embedded: {}; `grainbench scenes` lists them)",
-        names.join(", ")
-    )
-}
-
-/// Options of one run.
-#[derive(Clone)]
-pub(crate) struct RunFlags {
-    pub(crate) quiet: bool,
-    /// Print the metrics table of the final state.
-    pub(crate) report: bool,
-    pub(crate) resume: bool,
-    pub(crate) checkpoint_every: f64,
-}
-
-fn set_threads(threads: Option<usize>) -> Result<()> {
-    if let Some(t) = threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .context("setting the thread count")?;
-    }
-    Ok(())
-}
-
-pub(crate) const CHECKPOINT: &str = "checkpoint.bin";
-
-/// The scene and output directory of `run`: with `--resume` the scene may come from the
-/// checkpoint of the output directory.
-fn scene_and_out(
-    spec: Option<&str>,
-    out: Option<PathBuf>,
-    resume: bool,
-) -> Result<(Scene, PathBuf)> {
-    match (spec, &out, resume) {
-        (None, Some(dir), true) => {
-            let cp = Checkpoint::read(&dir.join(CHECKPOINT)).map_err(anyhow::Error::msg)?;
-            let scene = cp.scene().map_err(anyhow::Error::msg)?;
-            Ok((scene, dir.clone()))
-        }
-        _ => {
-            let scene = load_scene(spec.unwrap_or("default"))?;
-            let out = out.unwrap_or_else(|| Path::new("runs").join(&scene.name));
-            Ok((scene, out))
-        }
-    }
-}
-
-/// Runs one scene into `out` (writing the snapshot, summary and checkpoints); returns the
-/// exit status and the outcome when the run ended normally or was interrupted.
-pub(crate) fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outcome>)> {
-    let quiet = flags.quiet;
-    let cp_path = out.join(CHECKPOINT);
-    let resume = if flags.resume {
-        let cp = Checkpoint::read(&cp_path).map_err(|e| {
-            anyhow::anyhow!("{e}\n(--resume continues a run from {}; there is nothing to resume without it: run without --resume)", cp_path.display())
-        })?;
-        let saved = cp.scene().map_err(anyhow::Error::msg)?;
-        if &saved != scene {
-            bail!(
-                "the checkpoint {} belongs to scene {:?} with other settings than the scene given; resume with the same scene, or omit the scene and give only --out",
-                cp_path.display(),
-                saved.name
-            );
-        }
-        Some(cp)
-    } else {
-        None
-    };
-    if !(flags.checkpoint_every.is_finite() && flags.checkpoint_every >= 0.0) {
-        bail!("--checkpoint-every must be a number of seconds ≥ 0");
-    }
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("creating the output directory {}", out.display()))?;
-    install_stop_handler();
-    let stop = &STOP;
-    eprintln!(
-        "grainbench {}: scene {} ({}D, N = {}, {} threads) → {}",
-        env!("CARGO_PKG_VERSION"),
-        scene.name,
-        scene.dimension,
-        scene.particles.count,
-        rayon::current_num_threads(),
-        out.display()
-    );
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(1000);
-        b.set_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix} {bar:30} {msg}")
-                .expect("valid template"),
-        );
-        b
-    };
-    // Without a terminal (CI logs), a plain line every few seconds instead of the bar.
-    let plain = !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let mut last_line = std::time::Instant::now();
-    let mut on_progress = |p: &Progress| {
-        let c = &p.checks;
-        if plain && last_line.elapsed().as_secs_f64() >= 5.0 {
-            last_line = std::time::Instant::now();
-            eprintln!(
-                "  stage {}/{} {} t={:.4e}/{:.1e} Φ={:.4} {} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}{}",
-                p.step_index + 1,
-                p.step_count,
-                p.step_kind,
-                p.time,
-                p.max_time,
-                c.packing_fraction,
-                pressure_text(c),
-                c.kinetic_per_grain,
-                c.force_ratio,
-                c.stress_ratio,
-                c.kinetic_ratio,
-                c.interactions,
-                clusters_text(c)
-            );
-        }
-        bar.set_prefix(format!(
-            "stage {}/{} {}",
-            p.step_index + 1,
-            p.step_count,
-            p.step_kind
-        ));
-        bar.set_position(((p.time / p.max_time).min(1.0) * 1000.0) as u64);
-        bar.set_message(format!(
-            "t={:.4e} Φ={:.4} {} Ek/grain={:.2e} F/crit={:.2e} contacts={}",
-            p.time,
-            c.packing_fraction,
-            pressure_text(c),
-            c.kinetic_per_grain,
-            c.force_ratio,
-            c.interactions
-        ));
-    };
-    if let Some(cp) = &resume {
-        eprintln!(
-            "resuming from {} (stage {} of {})",
-            cp_path.display(),
-            cp.header.stage + 1,
-            scene.stages().len()
-        );
-    }
-    let result = grainbench_engine::run_scene(
-        scene,
-        &mut RunOptions {
-            progress: Some(&mut on_progress),
-            stop: Some(stop),
-            checkpoint: Some(CheckpointSpec {
-                path: cp_path.clone(),
-                every: flags.checkpoint_every,
-            }),
-            resume,
-        },
-    );
-    bar.finish_and_clear();
-    let outcome = match result {
-        Ok(o) => o,
-        Err(e @ RunError::Unstable { .. }) => {
-            let RunError::Unstable { last_good, .. } = &e else {
-                unreachable!()
-            };
-            let path = out.join("last-good.snap.json");
-            last_good.write(&path)?;
-            eprintln!("error: {e}");
-            eprintln!(
-                "the last state that passed the checks is in {}",
-                path.display()
-            );
-            return Ok((4, None));
-        }
-        Err(e) => return Err(e.into()),
-    };
-    let snap_path = out.join(&scene.output.snapshot);
-    outcome.snapshot.write(&snap_path)?;
-    let summary = serde_json::json!({
-        "scene": scene.name,
-        "seed": scene.seed,
-        "settings": scene,
-        "engine": env!("CARGO_PKG_VERSION"),
-        "dimension": scene.dimension,
-        "n": scene.particles.count,
-        "law": outcome.law,
-        "dt": outcome.dt,
-        "k_max": outcome.k_max,
-        "threads": rayon::current_num_threads(),
-        "wall_seconds": outcome.wall_seconds,
-        "neighbor_builds": outcome.neighbor_builds,
-        "contacts_at_threshold": outcome.contacts_at_threshold,
-        "status": outcome.snapshot.status,
-        "steps": outcome.steps,
-        "snapshot": snap_path,
-    });
-    snapshot::write_atomic(
-        &out.join("summary.json"),
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
-    println!("scene      {} — {}", scene.name, scene.description);
-    println!("law        {}", outcome.law);
-    println!(
-        "time step  dt = {:.4e} ({} of the contact duration at K_max = {:.4e})",
-        outcome.dt, scene.numerics.dt_fraction, outcome.k_max
-    );
-    for s in &outcome.steps {
-        let c = &s.checks;
-        let head = format!(
-            "stage {:<3} {:<16} ended at {:<11} t = {:.4e}",
-            s.index + 1,
-            s.kind,
-            s.end.as_str(),
-            s.time
-        );
-        if s.end == grainbench_engine::run::StepEnd::Done {
-            // Hard-grain stages: `steps` counts pair collisions.
-            println!(
-                "{head} ({} collisions, {:.1} s): Φ = {:.5}",
-                s.steps, s.wall_seconds, c.packing_fraction
-            );
-        } else {
-            println!(
-                "{head} ({} steps, {:.1} s): Φ = {:.5}, P = {:.6}, force/crit = {:.3}, Ek/crit = {:.3}, stress/crit = {:.3}{}",
-                s.steps,
-                s.wall_seconds,
-                c.packing_fraction,
-                c.pressure,
-                c.force_ratio,
-                c.kinetic_ratio,
-                c.stress_ratio,
-                clusters_text(c)
-            );
-        }
-    }
-    if outcome.contacts_at_threshold > 0 {
-        println!(
-            "warning    {} contacts sit at their Coulomb or rolling threshold (GRC07 §II.D expects none at equilibrium)",
-            outcome.contacts_at_threshold
-        );
-    }
-    if flags.report {
-        print!(
-            "{}",
-            grainbench_comparisons::report::to_markdown(&analysis_of(&outcome.snapshot))
-        );
-    }
-    println!("snapshot   {}", snap_path.display());
-    println!("wall time  {:.1} s", outcome.wall_seconds);
-    if outcome.snapshot.status == "interrupted" {
-        eprintln!(
-            "interrupted: the state at the stop is in {}; continue with `grainbench run --resume --out {}`",
-            snap_path.display(),
-            out.display()
-        );
-        return Ok((130, Some(outcome)));
-    }
-    Ok((0, Some(outcome)))
-}
-
-/// The cluster count of aggregation stages (empty elsewhere).
-fn clusters_text(c: &grainbench_engine::run::Checks) -> String {
-    if c.clusters > 0 {
-        format!(" clusters={}", c.clusters)
-    } else {
-        String::new()
-    }
-}
-
-/// P/P₀ against a positive target, else P itself (fixed cell, or P* = 0).
-fn pressure_text(c: &grainbench_engine::run::Checks) -> String {
-    if c.pressure_target > 0.0 {
-        format!("P/P₀={:.4}", c.pressure / c.pressure_target)
-    } else {
-        format!("P={:.3e}", c.pressure)
+        Command::Scenes => common::list_scenes(),
     }
 }
 
 /// The scene bare `grainbench` compares across codes.
 const DEFAULT_COMPARE: &str = "xcode-smoke";
-
-/// Ctrl-C / SIGTERM: the first stops runs cleanly at their next check (external codes are
-/// killed, logs kept); a second one exits at once.
-fn install_stop_handler() {
-    static HANDLER: std::sync::Once = std::sync::Once::new();
-    HANDLER.call_once(|| {
-        let _ = ctrlc::set_handler(|| {
-            if STOP.swap(true, Ordering::SeqCst) {
-                std::process::exit(130);
-            }
-        });
-    });
-}
-
-fn analysis_of(snap: &Snapshot) -> grainbench_comparisons::metrics::Analysis {
-    grainbench_comparisons::metrics::analyze(snap, &Default::default())
-}
-
-fn analyze(path: &Path, json: bool, from: Option<&str>, write: Option<&Path>) -> Result<i32> {
-    use grainbench_comparisons::xcode::{import, Code};
-    let snap = match from {
-        None => Snapshot::read(path)?,
-        Some(name) => {
-            let code = match Code::parse(name) {
-                Some(Code::Rust) | None => {
-                    bail!("--from: expected lammps, liggghts or yade, got `{name}`")
-                }
-                Some(c) => c,
-            };
-            if !path.is_dir() {
-                bail!(
-                    "--from {name}: {} is not a directory (give the directory holding the final dumps and deck.json)",
-                    path.display()
-                );
-            }
-            let meta = import::Meta::read(path)?;
-            import::read(code, path, &meta)?
-        }
-    };
-    if let Some(w) = write {
-        snap.write(w)?;
-    }
-    let a = analysis_of(&snap);
-    if json {
-        println!("{}", serde_json::to_string_pretty(&a)?);
-    } else {
-        print!("{}", grainbench_comparisons::report::to_markdown(&a));
-    }
-    Ok(0)
-}

@@ -2,7 +2,7 @@
 //! (checkpointed, resumable), measures every metric with the same code as `analyze`, and
 //! writes the table against the published values (golden/paper-values.toml) and the plots.
 
-use crate::{run, RunFlags};
+use crate::run::{run, RunFlags, CHECKPOINT};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::metrics::{analyze, Analysis};
 use grainbench_comparisons::report::{paper, plots, reproduction};
@@ -116,7 +116,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             continue;
         }
         let flags = RunFlags {
-            resume: dir.join(crate::CHECKPOINT).exists(),
+            resume: dir.join(CHECKPOINT).exists(),
             ..a.flags.clone()
         };
         let (code, outcome) = run(&scene, &dir, &flags)?;
@@ -184,7 +184,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
 /// A seed that finished earlier with the same settings.
 fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedRun>> {
     let summary = dir.join("summary.json");
-    if dir.join(crate::CHECKPOINT).exists() || !summary.exists() {
+    if dir.join(CHECKPOINT).exists() || !summary.exists() {
         return Ok(None);
     }
     let s: serde_json::Value = serde_json::from_slice(&std::fs::read(&summary)?)

@@ -1,5 +1,6 @@
 //! `grainbench decks`, `capabilities`: the cross-code decks of a scene.
 
+use crate::common::load_scene;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::xcode::decks::{self, capability, Deck, Start};
 use grainbench_comparisons::xcode::Code;
@@ -112,7 +113,7 @@ pub fn decks_command(
         bail!("--out takes one scene; without it each scene goes to reference-inputs/<scene>/");
     }
     for name in &names {
-        let scene = crate::load_scene(name)?;
+        let scene = load_scene(name)?;
         let start = Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
         let root = out
             .clone()
@@ -127,7 +128,7 @@ pub fn capabilities_command(scene: Option<&str>) -> Result<i32> {
     match scene {
         None => print!("{}", capability::markdown()),
         Some(spec) => {
-            let scene = crate::load_scene(spec)?;
+            let scene = load_scene(spec)?;
             let start =
                 Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
             println!("scene {} uses:", scene.name);

@@ -21,6 +21,9 @@
 //!   cross-code table ([`xcode::crosscode`]).
 //! * [`report`]: what people read — the analysis as markdown/JSON, the number formats
 //!   ([`mod@report::format`]), the paper values, the reproduction table and the plots.
+//! * [`outcome`] and [`stats`]: how the run of one code ended (`ran`, `missing`, `timeout`,
+//!   …) and the statistics shared by the reports (mean, sample s.d., median, KS distance,
+//!   Pareto front).
 //!
 //! ```no_run
 //! use grainbench_comparisons::{analyze, report, Options};
@@ -31,7 +34,9 @@
 //! ```
 
 pub mod metrics;
+pub mod outcome;
 pub mod report;
+pub mod stats;
 pub mod xcode;
 
 pub use metrics::bond_order::bond_order;

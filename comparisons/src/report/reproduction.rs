@@ -18,6 +18,7 @@
 
 use super::format::{sig4, signed_sig4};
 use super::paper::{self, StateValues};
+use crate::stats;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
@@ -61,16 +62,11 @@ impl SeedStats {
     /// Mean and sample s.d. of the finite values; `None` if there is none.
     pub fn from_values(values: &[f64]) -> Option<SeedStats> {
         let v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-        if v.is_empty() {
-            return None;
-        }
-        let n = v.len();
-        let mean = v.iter().sum::<f64>() / n as f64;
-        let sd = (n > 1).then(|| {
-            let ss: f64 = v.iter().map(|x| (x - mean).powi(2)).sum();
-            (ss / (n - 1) as f64).sqrt()
-        });
-        Some(SeedStats { mean, sd, n })
+        Some(SeedStats {
+            mean: stats::mean(&v)?,
+            sd: stats::sample_sd(&v),
+            n: v.len(),
+        })
     }
 }
 

@@ -3,6 +3,7 @@
 //! (`golden/xcode-bands.toml`).
 
 use super::code::Code;
+use crate::outcome::Outcome;
 use crate::report::format::dec4;
 use crate::report::paper;
 use serde::{Deserialize, Serialize};
@@ -17,10 +18,10 @@ pub const TABLE_METRICS: &[&str] = &[
 /// What became of one code's run.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct CodeResult {
-    pub code: String,
-    /// `ran`, `missing` (binary not found), `refused` (scene not expressible), `failed`,
-    /// `timeout`, `interrupted`.
-    pub outcome: String,
+    pub code: Code,
+    /// `ran`, `recorded`, `missing` (binary not found), `refused` (scene not expressible),
+    /// `failed`, `timeout`, `interrupted`.
+    pub outcome: Outcome,
     /// Status of the final state (`equilibrium`, `time-limit`, …) when it ran.
     pub status: Option<String>,
     /// Version line of the code.
@@ -40,10 +41,10 @@ pub struct CodeResult {
 
 impl CodeResult {
     /// A result with only its code and outcome filled in.
-    pub fn new(code: &str, outcome: &str) -> CodeResult {
+    pub fn new(code: Code, outcome: Outcome) -> CodeResult {
         CodeResult {
-            code: code.into(),
-            outcome: outcome.into(),
+            code,
+            outcome,
             status: None,
             version: None,
             wall_seconds: None,
@@ -173,8 +174,8 @@ pub fn golden_metrics(root: &Path, scene: &str, code: &str) -> BTreeMap<String, 
 
 /// The recorded result of `code` (`golden/<scene>/<code>.json`) as a table column: mean metrics
 /// over its seeds, status and wall time of its first seed, the code's version.
-pub fn recorded(root: &Path, scene: &str, code: &str) -> Option<CodeResult> {
-    let doc = golden_doc(root, scene, code)?;
+pub fn recorded(root: &Path, scene: &str, code: Code) -> Option<CodeResult> {
+    let doc = golden_doc(root, scene, code.name())?;
     let first = &doc["seeds"][0];
     Some(CodeResult {
         status: first["status"].as_str().map(String::from),
@@ -188,7 +189,7 @@ pub fn recorded(root: &Path, scene: &str, code: &str) -> Option<CodeResult> {
             .filter_map(|d| d.as_str().map(String::from))
             .collect(),
         metrics: mean_metrics(&doc),
-        ..CodeResult::new(code, "recorded")
+        ..CodeResult::new(code, Outcome::Recorded)
     })
 }
 
@@ -207,7 +208,7 @@ pub fn build(
         .collect();
     keys.sort_by_key(|k| (paper::metric_order(k), k.clone()));
     keys.dedup();
-    let rust = codes.iter().find(|c| c.code == Code::Rust.name());
+    let rust = codes.iter().find(|c| c.code == Code::Rust);
     let mut failures = Vec::new();
     let mut rows = Vec::new();
     for key in keys {
@@ -232,21 +233,24 @@ pub fn build(
         let ours = rust.and_then(|r| r.metrics.get(&key)).copied();
         for c in &codes {
             if let Some(g) = c.golden.get(&key) {
-                row.golden.insert(c.code.clone(), *g);
+                row.golden.insert(c.code.name().to_string(), *g);
             }
             let Some(&v) = c.metrics.get(&key) else {
                 continue;
             };
-            row.values.insert(c.code.clone(), v);
+            row.values.insert(c.code.name().to_string(), v);
             if let (Some(pv), Some(sd)) = (row.paper, row.paper_sd) {
                 if sd > 0.0 {
-                    row.paper_sigma.insert(c.code.clone(), (v - pv) / sd);
+                    row.paper_sigma
+                        .insert(c.code.name().to_string(), (v - pv) / sd);
                 }
             }
             if let (Some(o), Some(s)) = (ours, spread) {
-                if c.code != Code::Rust.name() && s > 0.0 {
-                    row.rust_sigma
-                        .insert(c.code.clone(), (v - o) / (std::f64::consts::SQRT_2 * s));
+                if c.code != Code::Rust && s > 0.0 {
+                    row.rust_sigma.insert(
+                        c.code.name().to_string(),
+                        (v - o) / (std::f64::consts::SQRT_2 * s),
+                    );
                     if let Some(t) = tolerance {
                         if (v - o).abs() > t {
                             failures.push(format!(
@@ -263,8 +267,8 @@ pub fn build(
         rows.push(row);
     }
     for c in &codes {
-        match c.outcome.as_str() {
-            "ran" | "recorded" => {
+        match c.outcome {
+            Outcome::Ran | Outcome::Recorded => {
                 if c.status.as_deref() != Some("equilibrium") {
                     failures.push(format!(
                         "{}: final state is `{}`, not `equilibrium`",
@@ -286,7 +290,7 @@ pub fn build(
                     }
                 }
             }
-            "missing" | "refused" => {}
+            Outcome::Missing | Outcome::Refused => {}
             other => failures.push(format!(
                 "{}: {other}{}",
                 c.code,
@@ -355,24 +359,26 @@ impl Comparison {
             s.push_str(&format!("| {} | {} |", r.metric, paper));
             let ours = r.values.get(Code::Rust.name());
             for c in &self.codes {
-                let mut cell = match r.values.get(&c.code) {
+                let mut cell = match r.values.get(c.code.name()) {
                     Some(v) => dec4(*v),
                     None => "–".into(),
                 };
-                if let Some(g) = r.golden.get(&c.code) {
+                if let Some(g) = r.golden.get(c.code.name()) {
                     cell.push_str(&format!(" [{}]", dec4(*g)));
                 }
                 let mut notes = Vec::new();
-                if let Some(z) = r.paper_sigma.get(&c.code) {
+                if let Some(z) = r.paper_sigma.get(c.code.name()) {
                     notes.push(format!("{z:+.1}σp"));
                 }
-                if let Some(z) = r.rust_sigma.get(&c.code) {
+                if let Some(z) = r.rust_sigma.get(c.code.name()) {
                     notes.push(format!("{z:+.1}σs"));
                 }
                 if !notes.is_empty() {
                     cell.push_str(&format!(" ({})", notes.join("; ")));
                 }
-                if let (Some(t), Some(v), Some(o)) = (r.tolerance, r.values.get(&c.code), ours) {
+                if let (Some(t), Some(v), Some(o)) =
+                    (r.tolerance, r.values.get(c.code.name()), ours)
+                {
                     if (v - o).abs() > t {
                         cell.push_str(" *");
                     }
@@ -413,8 +419,8 @@ impl Comparison {
         let o = |x: Option<f64>| x.map(|v| v.to_string()).unwrap_or_default();
         for r in &self.rows {
             for c in &self.codes {
-                let v = r.values.get(&c.code).copied();
-                let g = r.golden.get(&c.code).copied();
+                let v = r.values.get(c.code.name()).copied();
+                let g = r.golden.get(c.code.name()).copied();
                 if v.is_none() && g.is_none() {
                     continue;
                 }
@@ -441,8 +447,8 @@ mod tests {
 
     fn result(code: &str, phi: f64, p: f64) -> CodeResult {
         CodeResult {
-            code: code.into(),
-            outcome: "ran".into(),
+            code: Code::parse(code).unwrap(),
+            outcome: Outcome::Ran,
             status: Some("equilibrium".into()),
             version: None,
             wall_seconds: Some(1.0),
@@ -497,7 +503,7 @@ mod tests {
         );
         assert_eq!(bad.failures.len(), 2, "{:?}", bad.failures);
         let mut missing = result("yade", 0.0, 0.0);
-        missing.outcome = "missing".into();
+        missing.outcome = Outcome::Missing;
         missing.metrics.clear();
         let m = build(
             "s",
@@ -508,7 +514,7 @@ mod tests {
         );
         assert!(m.failures.is_empty());
         let mut timeout = result("yade", 0.0, 0.0);
-        timeout.outcome = "timeout".into();
+        timeout.outcome = Outcome::Timeout;
         timeout.metrics.clear();
         let t = build(
             "s",

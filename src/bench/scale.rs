@@ -8,10 +8,11 @@
 //! small strain-rate cap (1e-3) so that it stays dense over the timed steps; it is not
 //! equilibrated.
 
-use crate::bench::{Args, Stat};
-use crate::compare;
+use crate::common::{install_stop_handler, set_threads, STOP};
+use crate::external;
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::report::plots::{line_plot, Axis, LinePlot, Marks, Series};
+use grainbench_comparisons::plots::{line_plot, Axis, LinePlot, Marks, Series};
+use grainbench_comparisons::stats::Stat;
 use grainbench_engine::cell::{Cell, Control};
 use grainbench_engine::contact::slider::Coulomb;
 use grainbench_engine::geometry::{Dim, Linear as _, D3};
@@ -159,7 +160,7 @@ fn vm_hwm() -> Option<u64> {
 
 /// The child: prepares one size, times `steps` steps, prints a [`Point`] as JSON.
 pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
-    crate::set_threads(Some(threads))?;
+    set_threads(Some(threads))?;
     let t0 = Instant::now();
     let (copies, base) = tiling(n_wanted);
     let (s0, l0) = random_packing(base)?;
@@ -218,26 +219,37 @@ pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
     Ok(0)
 }
 
+/// What `bench --scale` was asked for.
+pub struct Sweep<'a> {
+    /// Particle counts wanted.
+    pub sizes: &'a [usize],
+    pub threads: &'a [usize],
+    /// Steps timed per size (default [`DEFAULT_STEPS`]).
+    pub steps: Option<u64>,
+    /// Output directory (default `runs/bench/scale`).
+    pub out: Option<&'a Path>,
+    /// Wall-time limit of each child, seconds.
+    pub time_limit: f64,
+    pub quiet: bool,
+}
+
 /// `grainbench bench --scale …`.
-pub fn sweep(a: &Args) -> Result<i32> {
-    if a.scale.iter().any(|&n| n < 32) {
+pub fn sweep(a: &Sweep) -> Result<i32> {
+    if a.sizes.iter().any(|&n| n < 32) {
         bail!("--scale: sizes must be at least 32 particles");
     }
     let steps = a.steps.unwrap_or(DEFAULT_STEPS);
-    let out = a
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("runs/bench/scale").into());
-    std::fs::create_dir_all(&out)
+    let out = a.out.unwrap_or(Path::new("runs/bench/scale"));
+    std::fs::create_dir_all(out)
         .with_context(|| format!("creating the output directory {}", out.display()))?;
-    let out = std::path::absolute(&out)?;
-    crate::install_stop_handler();
+    let out = std::path::absolute(out)?;
+    install_stop_handler();
     let exe = std::env::current_exe().context("locating the grainbench executable")?;
     let mut points: Vec<Point> = Vec::new();
     let mut failures = Vec::new();
-    for &n in &a.scale {
-        for &t in &a.threads {
-            if crate::STOP.load(std::sync::atomic::Ordering::SeqCst) {
+    for &n in a.sizes {
+        for &t in a.threads {
+            if STOP.load(std::sync::atomic::Ordering::SeqCst) {
                 break;
             }
             let dir = out.join("runs").join(format!("n{n}-j{t}"));
@@ -249,7 +261,7 @@ pub fn sweep(a: &Args) -> Result<i32> {
             cmd.args(["bench", "--child-scale", &n.to_string(), "--steps"])
                 .arg(steps.to_string())
                 .args(["--threads", &t.to_string()]);
-            let done = compare::supervise(&mut cmd, &dir, "scale", a.time_limit, a.quiet, None)?;
+            let done = external::supervise(&mut cmd, &dir, "scale", a.time_limit, a.quiet, None)?;
             let text = std::fs::read_to_string(dir.join("stdout.log")).unwrap_or_default();
             let parsed = text
                 .lines()
@@ -273,7 +285,7 @@ pub fn sweep(a: &Args) -> Result<i32> {
                         None => format!("killed after the time limit of {} s", a.time_limit),
                         Some(s) => format!(
                             "exited with {s}: {:?}",
-                            compare::failure_line(&dir.join("stderr.log"))
+                            external::failure_line(&dir.join("stderr.log"))
                         ),
                     };
                     eprintln!("  N ≈ {n}, {t} thread(s): {why}; logs in {}", dir.display());

@@ -1,0 +1,71 @@
+//! What several commands share: the stop flag and its signal handler, the worker-thread
+//! count, scene lookup, and the packing analysis of a snapshot.
+
+use anyhow::{bail, Context, Result};
+use grainbench_comparisons::metrics::{analyze, Analysis};
+use grainbench_engine::{library, Scene, Snapshot};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set by the first Ctrl-C (or SIGTERM): runs stop cleanly at their next check.
+pub static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Ctrl-C / SIGTERM: the first stops runs cleanly at their next check (external codes are
+/// killed, logs kept); a second one exits at once.
+pub fn install_stop_handler() {
+    static HANDLER: std::sync::Once = std::sync::Once::new();
+    HANDLER.call_once(|| {
+        let _ = ctrlc::set_handler(|| {
+            if STOP.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    });
+}
+
+/// Sizes the global rayon pool (default: all cores).
+pub fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(t) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("setting the thread count")?;
+    }
+    Ok(())
+}
+
+/// Loads a scene from a file, or an embedded one by name.
+pub fn load_scene(spec: &str) -> Result<Scene> {
+    let path = Path::new(spec);
+    if path.is_file() || (path.exists() && library::scene_text(spec).is_none()) {
+        return Ok(Scene::from_file(path)?);
+    }
+    if let Some(text) = library::scene_text(spec) {
+        return Ok(Scene::from_toml(
+            text,
+            Path::new(&format!("<embedded:{spec}>")),
+        )?);
+    }
+    let names: Vec<&str> = library::SCENES.iter().map(|(n, _)| *n).collect();
+    bail!(
+        "no scene file {spec:?} and no embedded scene of that name (embedded: {}; `grainbench scenes` lists them)",
+        names.join(", ")
+    )
+}
+
+/// `grainbench scenes`: the embedded scenes, one line each.
+pub fn list_scenes() -> Result<i32> {
+    for (name, text) in library::SCENES {
+        let scene = Scene::from_toml(text, Path::new(name))?;
+        println!(
+            "{name:<24} {}D N={:<6} {}",
+            scene.dimension, scene.particles.count, scene.description
+        );
+    }
+    Ok(0)
+}
+
+/// The packing metrics of a snapshot with the default options (as `analyze` prints them).
+pub fn analysis_of(snap: &Snapshot) -> Analysis {
+    analyze(snap, &Default::default())
+}

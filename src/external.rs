@@ -1,0 +1,460 @@
+//! External codes (LAMMPS, LIGGGHTS, YADE) and our own engine as child processes: the binary
+//! and deck of a code, its command line, the supervised run (time limit, Ctrl-C, peak
+//! memory, progress line), the outcome and the final state read back, and what their logs
+//! say (version, steps, loop time, the failure line). Used by `compare`, `bench` and
+//! `accuracy`.
+
+use crate::common::STOP;
+use crate::xcode;
+use anyhow::{bail, Context, Result};
+use grainbench_comparisons::crosscode::CodeResult;
+use grainbench_comparisons::decks::{self, Code, Start};
+use grainbench_comparisons::import::{self, Meta};
+use grainbench_comparisons::outcome::Outcome;
+use grainbench_engine::snapshot::Snapshot;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+/// An external code in its own work directory, with a progress line and a time limit.
+/// LAMMPS and LIGGGHTS run under `mpirun -np K` when `np` is given.
+pub fn run(
+    start: &Start,
+    code: Code,
+    dir: &Path,
+    time_limit: f64,
+    np: Option<usize>,
+    quiet: bool,
+    r: &mut CodeResult,
+) -> Result<Option<Snapshot>> {
+    let Some((binary, deck)) = prepare(start, code, r) else {
+        return Ok(None);
+    };
+    write_fresh_deck(&deck, dir)?;
+    let mut cmd = command(code, &binary, &deck, np, None)?;
+    let done = supervise(
+        &mut cmd,
+        dir,
+        code.name(),
+        time_limit,
+        quiet,
+        Some("stdout.log"),
+    )?;
+    r.wall_seconds = Some(done.wall_seconds);
+    finish(code, dir, &done, time_limit, r)
+}
+
+/// The binary and deck of an external code, or `None` with `r` saying why (missing binary,
+/// scene refused).
+pub fn prepare(start: &Start, code: Code, r: &mut CodeResult) -> Option<(PathBuf, decks::Deck)> {
+    let Some(binary) = code.find() else {
+        r.outcome = Outcome::Missing;
+        r.message = Some(format!(
+            "`{}` not found on PATH; install with `{}` (or `bash ci/install-externals.sh`)",
+            code.binary(),
+            code.install_hint()
+        ));
+        return None;
+    };
+    match decks::deck(start, code) {
+        Ok(d) => {
+            r.deviations = d.deviations.clone();
+            Some((binary, d))
+        }
+        Err(refusal) => {
+            r.outcome = Outcome::Refused;
+            r.message = Some(refusal.to_string());
+            None
+        }
+    }
+}
+
+/// Writes `deck` into a fresh `dir` (old dumps must not be read as this run's).
+pub fn write_fresh_deck(deck: &decks::Deck, dir: &Path) -> Result<()> {
+    if dir.exists() {
+        std::fs::remove_dir_all(dir).with_context(|| format!("clearing {}", dir.display()))?;
+    }
+    xcode::write_deck(deck, dir)
+}
+
+/// The command running `deck`: LAMMPS and LIGGGHTS under `mpirun -np K` when `np` is given,
+/// YADE with `-j threads` when given.
+pub fn command(
+    code: Code,
+    binary: &Path,
+    deck: &decks::Deck,
+    np: Option<usize>,
+    yade_threads: Option<usize>,
+) -> Result<Command> {
+    let mut cmd = match (np, code) {
+        (Some(k), Code::Lammps | Code::Liggghts) => {
+            let Some(mpirun) = decks::which("mpirun") else {
+                bail!("running {code} on {k} processes needs `mpirun` (Debian: apt-get install -y --no-install-recommends openmpi-bin)");
+            };
+            let mut c = Command::new(mpirun);
+            c.args([
+                "--allow-run-as-root",
+                "--oversubscribe",
+                "-np",
+                &k.to_string(),
+            ]);
+            c.arg(binary);
+            c
+        }
+        _ => Command::new(binary),
+    };
+    if let (Some(t), Code::Yade) = (yade_threads, code) {
+        cmd.args(["-j", &t.to_string()]);
+    }
+    cmd.args(&deck.args);
+    if code == Code::Yade {
+        // YADE opens local ports and reads its own environment; keep it headless.
+        cmd.env("DISPLAY", "");
+    }
+    Ok(cmd)
+}
+
+/// How a supervised child process ended.
+pub struct Finished {
+    /// Exit status; `None` when killed at the time limit or by Ctrl-C.
+    pub status: Option<std::process::ExitStatus>,
+    /// From the start to the reaping of the process.
+    pub wall_seconds: f64,
+    /// `ru_maxrss` of the process (`wait4`), KiB: its largest resident set, or that of its
+    /// largest waited-for descendant (e.g. one MPI rank under `mpirun`).
+    pub max_rss_kib: u64,
+    /// Largest sum of the resident sets of its process group, sampled every 0.25 s, KiB.
+    pub group_rss_kib: u64,
+}
+
+impl Finished {
+    /// max(`wait4` ru_maxrss, sampled sum over the process group), KiB.
+    pub fn peak_rss_kib(&self) -> u64 {
+        self.max_rss_kib.max(self.group_rss_kib)
+    }
+}
+
+/// Runs `cmd` in `dir` with stdout/stderr in `stdout.log`/`stderr.log`, a progress line from
+/// the last line of the log `progress` names (unless `None`), the time limit and Ctrl-C (the process
+/// group is terminated). Resource usage comes from `wait4` for this process only.
+pub fn supervise(
+    cmd: &mut Command,
+    dir: &Path,
+    label: &str,
+    time_limit: f64,
+    quiet: bool,
+    progress: Option<&str>,
+) -> Result<Finished> {
+    use std::os::unix::process::{CommandExt, ExitStatusExt};
+    cmd.current_dir(dir).stdin(Stdio::null());
+    let stdout = std::fs::File::create(dir.join("stdout.log"))?;
+    let stderr = std::fs::File::create(dir.join("stderr.log"))?;
+    cmd.stdout(stdout).stderr(stderr);
+    // Its own process group: a time-limit kill reaches mpirun's ranks too.
+    cmd.process_group(0);
+    let t = Instant::now();
+    let child = cmd
+        .spawn()
+        .with_context(|| format!("starting {:?}", cmd.get_program()))?;
+    let pid = child.id() as libc::pid_t;
+    // Reaped by wait4 in the waiter thread (for its rusage), not by `Child`.
+    drop(child);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut status = 0;
+        // SAFETY: an all-zero rusage is a valid value; wait4 only writes into it.
+        let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+        let r = loop {
+            // SAFETY: plain system call on our own child with valid pointers.
+            let r = unsafe { libc::wait4(pid, &mut status, 0, &mut ru) };
+            if r >= 0 || std::io::Error::last_os_error().kind() != std::io::ErrorKind::Interrupted {
+                break r;
+            }
+        };
+        let wall = t.elapsed().as_secs_f64();
+        let _ = tx.send((r, status, wall, ru.ru_maxrss.max(0) as u64));
+    });
+    let bar = if quiet || progress.is_none() {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new_spinner();
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix} {msg}")
+                .expect("template"),
+        );
+        b.set_prefix(label.to_string());
+        b
+    };
+    let plain =
+        progress.is_some() && !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mut last_plain = Instant::now();
+    let mut group_rss = 0;
+    let mut killed = false;
+    let mut term_at: Option<Instant> = None;
+    let (r, status, wall, max_rss) = loop {
+        match rx.recv_timeout(Duration::from_millis(250)) {
+            Ok(v) => break v,
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                bail!("lost the waiter of process {pid}")
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+        }
+        group_rss = group_rss.max(process_group_rss_kib(pid));
+        let elapsed = t.elapsed().as_secs_f64();
+        if !killed && (elapsed > time_limit || STOP.load(Ordering::SeqCst)) {
+            killed = true;
+            term_at = Some(Instant::now());
+            // SAFETY: signals the process group we created (not yet reaped: the waiter has
+            // not reported).
+            unsafe { libc::kill(-pid, libc::SIGTERM) };
+        }
+        if term_at.is_some_and(|k| k.elapsed().as_secs_f64() > 5.0) {
+            // SAFETY: as above.
+            unsafe { libc::kill(-pid, libc::SIGKILL) };
+            term_at = None;
+        }
+        if let Some(log) = progress {
+            let line = last_line(&dir.join(log));
+            bar.set_message(line.clone());
+            bar.tick();
+            if plain && last_plain.elapsed().as_secs_f64() >= 10.0 {
+                last_plain = Instant::now();
+                eprintln!("  {label} [{elapsed:.0} s] {line}");
+            }
+        }
+    };
+    bar.finish_and_clear();
+    if killed {
+        // Ranks left behind by a killed mpirun.
+        // SAFETY: the group id is that of our child; a group without members is a no-op.
+        unsafe { libc::kill(-pid, libc::SIGKILL) };
+    }
+    if r < 0 {
+        bail!(
+            "waiting for process {pid}: {}",
+            std::io::Error::last_os_error()
+        );
+    }
+    Ok(Finished {
+        status: (!killed).then(|| std::process::ExitStatus::from_raw(status)),
+        wall_seconds: wall,
+        max_rss_kib: max_rss,
+        group_rss_kib: group_rss,
+    })
+}
+
+/// Sum of VmRSS over the processes of process group `pgid`, KiB (0 where /proc is absent).
+fn process_group_rss_kib(pgid: libc::pid_t) -> u64 {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return 0;
+    };
+    let mut sum = 0;
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(pid) = name
+            .to_str()
+            .filter(|n| n.bytes().all(|b| b.is_ascii_digit()))
+        else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+            continue;
+        };
+        // Fields after the parenthesised command: state ppid pgrp …
+        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+            continue;
+        };
+        if rest.split_whitespace().nth(2) != Some(&pgid.to_string()) {
+            continue;
+        }
+        if let Ok(st) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
+            if let Some(kb) = st
+                .lines()
+                .find(|l| l.starts_with("VmRSS:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse::<u64>().ok())
+            {
+                sum += kb;
+            }
+        }
+    }
+    sum
+}
+
+/// The outcome of a finished external run, and its final state read back.
+pub fn finish(
+    code: Code,
+    dir: &Path,
+    done: &Finished,
+    time_limit: f64,
+    r: &mut CodeResult,
+) -> Result<Option<Snapshot>> {
+    r.version = version_line(code, &dir.join("stdout.log"));
+    let logs = format!("logs in {}", dir.display());
+    match done.status {
+        None if STOP.load(Ordering::SeqCst) => {
+            r.outcome = Outcome::Interrupted;
+            r.message = Some(logs);
+            return Ok(None);
+        }
+        None => {
+            r.outcome = Outcome::Timeout;
+            r.message = Some(format!(
+                "killed after the time limit of {time_limit} s (--time-limit); {logs}"
+            ));
+            return Ok(None);
+        }
+        Some(s) if !s.success() => {
+            r.outcome = Outcome::Failed;
+            r.message = Some(format!(
+                "exited with {s}; last output: {:?}; {logs}",
+                last_line(&dir.join("stderr.log"))
+                    .chars()
+                    .chain(last_line(&dir.join("stdout.log")).chars())
+                    .collect::<String>()
+            ));
+            return Ok(None);
+        }
+        Some(_) => {}
+    }
+    let meta = Meta::read(dir)?;
+    match import::read(code, dir, &meta) {
+        Ok(snap) => {
+            snap.write(&dir.join("final.snap.json"))?;
+            Ok(Some(snap))
+        }
+        Err(e) => {
+            r.outcome = Outcome::Failed;
+            r.message = Some(format!("reading its final state: {e}; {logs}"));
+            Ok(None)
+        }
+    }
+}
+
+/// The line of a log saying why a process failed: a Rust panic's message or an `error:`
+/// line, else the last line.
+pub fn failure_line(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().collect();
+    if let Some(k) = lines.iter().position(|l| l.contains("panicked at")) {
+        return lines[k..(k + 2).min(lines.len())].join(" ");
+    }
+    if let Some(l) = lines.iter().rev().find(|l| l.starts_with("error")) {
+        return l.to_string();
+    }
+    last_line(path)
+}
+
+/// The last non-empty line of a log (for the progress line and error messages).
+pub fn last_line(path: &Path) -> String {
+    let Ok(bytes) = std::fs::read(path) else {
+        return String::new();
+    };
+    let tail = &bytes[bytes.len().saturating_sub(4096)..];
+    let text = String::from_utf8_lossy(tail);
+    // Prefer a progress line (a thermo row starting with the step, or YADE's `stage …`) over
+    // the run summaries LAMMPS and LIGGGHTS print between chunks.
+    let progress = |l: &&&str| {
+        let first = l.split_whitespace().next().unwrap_or("");
+        first.parse::<u64>().is_ok() || first == "stage"
+    };
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    lines
+        .iter()
+        .rev()
+        .find(progress)
+        .or(lines.last())
+        .copied()
+        .unwrap_or("")
+        .trim()
+        .chars()
+        .take(120)
+        .collect()
+}
+
+/// The code's own version line from its output.
+pub fn version_line(code: Code, stdout: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(stdout).ok()?;
+    let key = match code {
+        Code::Lammps => "LAMMPS (",
+        Code::Liggghts => "LIGGGHTS (",
+        Code::Yade => "Yade ",
+        Code::Rust => return None,
+    };
+    text.lines()
+        .find(|l| l.contains(key))
+        .map(clean_version)
+        .or_else(|| Some(code.binary().to_string()))
+}
+
+/// `Welcome to Yade 2023.02a` → `Yade 2023.02a`.
+pub fn clean_version(line: &str) -> String {
+    line.trim().trim_start_matches("Welcome to ").to_string()
+}
+
+/// Steps of a LAMMPS/LIGGGHTS run: the sum of its `Loop time of … for S steps` lines.
+pub fn log_steps(dir: &Path) -> Option<u64> {
+    let text = std::fs::read_to_string(dir.join("stdout.log")).ok()?;
+    let steps: Vec<u64> = text
+        .lines()
+        .filter(|l| l.starts_with("Loop time of "))
+        .filter_map(|l| {
+            l.split(" for ")
+                .nth(1)?
+                .split_whitespace()
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect();
+    (!steps.is_empty()).then(|| steps.iter().sum())
+}
+
+/// Time-stepping loop time from a code's log: the sum of LAMMPS/LIGGGHTS `Loop time of X on
+/// P procs for S steps` lines, or YADE's `done: … after S steps, T s`.
+pub fn loop_time(code: Code, dir: &Path) -> Option<f64> {
+    let text = std::fs::read_to_string(dir.join("stdout.log")).ok()?;
+    match code {
+        Code::Lammps | Code::Liggghts => {
+            let times: Vec<f64> = text
+                .lines()
+                .filter_map(|l| l.strip_prefix("Loop time of "))
+                .filter_map(|l| l.split_whitespace().next()?.parse().ok())
+                .collect();
+            (!times.is_empty()).then(|| times.iter().sum())
+        }
+        Code::Yade => text
+            .lines()
+            .rev()
+            .find_map(|l| l.strip_prefix("done: "))
+            .and_then(|l| l.rsplit(", ").next())
+            .and_then(|t| t.trim().trim_end_matches('s').trim().parse().ok())
+            // Printed to 0.1 s: shorter loops are unknown.
+            .filter(|&t: &f64| t >= 0.1),
+        Code::Rust => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn loop_times_from_logs() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("stdout.log"),
+            "Loop time of 1.5 on 1 procs for 200 steps with 256 atoms\n\nLoop time of 0.25 on 1 procs for 0 steps with 256 atoms\n",
+        )
+        .unwrap();
+        assert_eq!(loop_time(Code::Lammps, dir.path()), Some(1.75));
+        std::fs::write(
+            dir.path().join("stdout.log"),
+            "stage 0 …\ndone: time-limit after 400 steps, 3.2 s\n",
+        )
+        .unwrap();
+        assert_eq!(loop_time(Code::Yade, dir.path()), Some(3.2));
+    }
+}
