@@ -9,7 +9,6 @@
 //! scenes), [`protocols`] (event-driven hard grains, Lubachevsky–Stillinger growth, FCC).
 
 pub mod cell;
-pub mod checkpoint;
 pub mod contact;
 pub mod geometry;
 pub mod init;
@@ -21,6 +20,7 @@ pub mod scene;
 pub mod snapshot;
 pub mod system;
 
+pub use run::checkpoint;
 pub use run::{run_scene, Outcome, RunError, RunOptions};
 pub use scene::Scene;
 pub use snapshot::Snapshot;
