@@ -1000,9 +1000,7 @@ impl Scene {
 
     /// Friction coefficient of a DEM step: its override or `law.mu`.
     pub fn mu_of(&self, step: &Step) -> Mu {
-        step.mu().unwrap_or(match &self.law {
-            Law::HertzMindlin { mu, .. } | Law::Linear { mu, .. } => *mu,
-        })
+        step.mu().unwrap_or(self.law.mu())
     }
 }
 
@@ -1011,6 +1009,12 @@ impl Law {
     pub fn kappa(&self) -> f64 {
         match self {
             Law::HertzMindlin { kappa, .. } | Law::Linear { kappa, .. } => *kappa,
+        }
+    }
+    /// The friction coefficient μ.
+    pub fn mu(&self) -> Mu {
+        match self {
+            Law::HertzMindlin { mu, .. } | Law::Linear { mu, .. } => *mu,
         }
     }
     pub fn cohesion(&self) -> Option<Cohesion> {

@@ -163,9 +163,7 @@ pub(super) fn contacts_at_threshold<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
     scene: &Scene,
 ) -> usize {
-    let mu = match &scene.law {
-        Law::HertzMindlin { mu, .. } | Law::Linear { mu, .. } => mu.value(),
-    };
+    let mu = scene.law.mu().value();
     let mu_r = match &scene.law {
         Law::Linear {
             rolling: Some(r), ..

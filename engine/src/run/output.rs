@@ -3,7 +3,7 @@
 use super::checkpoint;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, Linear as _};
-use crate::scene::{Law, Mu, Scene};
+use crate::scene::{Mu, Scene};
 use crate::snapshot::{self, Snapshot};
 use crate::system::System;
 
@@ -16,11 +16,9 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
 ) -> Snapshot {
     let n = sys.len();
     let cohesive = scene.law.cohesion().is_some();
-    let mu = match &scene.law {
-        Law::HertzMindlin { mu, .. } | Law::Linear { mu, .. } => match mu {
-            Mu::Finite(x) => Some(*x),
-            Mu::Infinite => None,
-        },
+    let mu = match scene.law.mu() {
+        Mu::Finite(x) => Some(x),
+        Mu::Infinite => None,
     };
     let omega = sys.cell.volume();
     let tensor = |t: &crate::geometry::Tensor| -> Vec<Vec<f64>> {
