@@ -1,13 +1,12 @@
 //! Checks at each check point: the equilibrium measures, clusters, contacts at a threshold,
 //! blow-up detection.
 
+use super::numerics::StageNumerics;
 use super::output::snapshot_of;
 use super::report::{Checks, RunError};
-use super::setup::time_step;
 use crate::cell::Control;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, Linear as _};
-use crate::scene::{Criteria, Law, Scene, Step};
 use crate::system::{self, System};
 
 /// Number of clusters of `n` grains linked by interactions (contacts or distant attractions).
@@ -55,30 +54,33 @@ pub(super) fn step_correlation<V: crate::geometry::Linear>(a: &[V], b: &[V]) -> 
     }
 }
 
-/// The error for a blown-up run; `sys` is returned to the last good checkpoint to write it.
+/// The error for a blown-up run of scene `scene`; `sys` is returned to the last good
+/// checkpoint to write it.
 pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
-    scene: &Scene,
+    scene: &str,
+    num: &StageNumerics,
     sys: &mut System<D, L>,
     last_good: &Option<system::Checkpoint<D, L>>,
     what: String,
 ) -> RunError {
-    let (_, k_max) = time_step::<D, L>(scene, sys);
+    let (_, k_max) = num.time_step(sys);
     let cause = format!(
         "{what}. Likely cause: the time step dt = {:.4e} (numerics.dt_fraction = {} of the contact duration for K_max = {:.4e}) is too large for the contacts, or the contacts are too soft (law.kappa) for the applied pressure. Try a smaller numerics.dt_fraction, or a larger numerics.stiffness_force if forces exceed the expected scale",
-        sys.dt, scene.numerics.dt_fraction, k_max
+        sys.dt, num.dt_fraction, k_max
     );
     let (step, time) = (sys.step, sys.time);
     if let Some(cp) = last_good {
         sys.restore(cp);
     }
     RunError::Unstable {
-        scene: scene.name.clone(),
+        scene: scene.into(),
         step,
         time,
         cause,
         last_good: Box::new(snapshot_of(
             sys,
             scene,
+            num,
             "unstable",
             match sys.cell.control {
                 Control::Stress { target, .. } => Some(target[0]),
@@ -88,13 +90,9 @@ pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
     }
 }
 
-/// Equilibrium measures in units of the criteria.
-pub fn measure<D: Dim, L: ContactLaw<D>>(
-    sys: &System<D, L>,
-    c: &Criteria,
-    f_ref: f64,
-    step: &Step,
-) -> Checks {
+/// Equilibrium measures in units of the criteria of the stage.
+pub fn measure<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, num: &StageNumerics) -> Checks {
+    let f_ref = num.f_ref;
     let n = sys.len() as f64;
     let (fmax, tmax) = sys.max_unbalanced();
     let inter = sys.interactions();
@@ -126,12 +124,12 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(
     let ke = (ke_t + ke_r) / n;
     let sc = sys.contact_stress();
     let p = (0..D::D).map(|a| sc[a][a]).sum::<f64>() / D::D as f64;
-    let (target, stress_ratio) = match (step, sys.cell.control) {
-        (Step::Compress { .. }, Control::Stress { target, .. }) => {
+    let (target, stress_ratio) = match (num.compress, sys.cell.control) {
+        (true, Control::Stress { target, .. }) => {
             let dev = (0..D::D)
                 .map(|a| (sc[a][a] - target[a]).abs())
                 .fold(0.0, f64::max);
-            (target[0], dev / (c.pressure * f_ref))
+            (target[0], dev / (num.stress * f_ref))
         }
         _ => (f64::NAN, 0.0),
     };
@@ -139,18 +137,18 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(
         packing_fraction: sys.packing_fraction(),
         pressure: p,
         pressure_target: target,
-        force_ratio: fmax / (c.force * f_ref),
+        force_ratio: fmax / (num.force * f_ref),
         moment_ratio: if L::MOMENTS {
-            tmax / (c.moment * f_ref)
+            tmax / (num.moment * f_ref)
         } else {
             0.0
         },
         stress_ratio,
-        kinetic_ratio: ke / (c.kinetic * f_ref),
+        kinetic_ratio: ke / (num.kinetic * f_ref),
         kinetic_per_grain: ke,
         free_spin_per_grain: ke_free / n,
         interactions: inter.len(),
-        clusters: if matches!(step, Step::Aggregate { .. }) {
+        clusters: if num.aggregate {
             clusters(sys.len(), &inter)
         } else {
             0
@@ -161,15 +159,9 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(
 /// Contacts whose tangential force or rolling moment sits at its threshold.
 pub(super) fn contacts_at_threshold<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
-    scene: &Scene,
+    num: &StageNumerics,
 ) -> usize {
-    let mu = scene.law.mu().value();
-    let mu_r = match &scene.law {
-        Law::Linear {
-            rolling: Some(r), ..
-        } => r.mu_r,
-        _ => f64::INFINITY,
-    };
+    let (mu, mu_r) = (num.mu.value(), num.mu_r);
     sys.interactions()
         .iter()
         .filter(|c| {

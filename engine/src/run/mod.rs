@@ -8,6 +8,7 @@
 
 pub mod checkpoint;
 pub mod checks;
+pub mod numerics;
 pub mod options;
 pub mod output;
 pub mod report;
@@ -16,6 +17,7 @@ pub mod stages;
 
 pub use crate::contact::from_scene::{adhesion, hertz_mindlin_law, linear_law, rolling_spring};
 pub use checks::measure;
+pub use numerics::StageNumerics;
 pub use options::{CheckpointSpec, RunOptions};
 pub use output::snapshot_of;
 pub use report::{Checks, Outcome, Progress, RunError, StepEnd, StepReport};
@@ -227,7 +229,8 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
             (sys, None)
         }
     };
-    let (dt, k_max) = time_step::<D, L>(scene, &sys);
+    let num = StageNumerics::of_scene(scene);
+    let (dt, k_max) = num.time_step(&sys);
     debug_assert!(resume_at.is_some() || sys.dt == dt);
     ctx.dt = sys.dt;
     ctx.k_max = k_max;
@@ -235,7 +238,7 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
     let builds0 = sys.nlist.builds;
     let stopped = run_stages(ctx, &mut sys, range, resume_at, opts)?;
     ctx.neighbor_builds += sys.nlist.builds - builds0;
-    ctx.at_threshold = contacts_at_threshold(&sys, scene);
+    ctx.at_threshold = contacts_at_threshold(&sys, &num);
     let status = if stopped {
         "interrupted"
     } else if ctx.reports.iter().all(|r| r.end.ok()) {
@@ -243,7 +246,7 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
     } else {
         "time-limit"
     };
-    let snap = snapshot_of(&sys, scene, status, ctx.pressure);
+    let snap = snapshot_of(&sys, &scene.name, &num, status, ctx.pressure);
     ctx.grains = Grains {
         l: sys.cell.l,
         s: sys.s.clone(),

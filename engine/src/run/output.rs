@@ -1,22 +1,24 @@
 //! The snapshot of a system: what a run writes.
 
 use super::checkpoint;
+use super::numerics::StageNumerics;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, Linear as _};
-use crate::scene::{Mu, Scene};
+use crate::scene::Mu;
 use crate::snapshot::{self, Snapshot};
 use crate::system::System;
 
 /// The snapshot of the current state.
 pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
-    scene: &Scene,
+    scene: &str,
+    num: &StageNumerics,
     status: &str,
     pressure_target: Option<f64>,
 ) -> Snapshot {
     let n = sys.len();
-    let cohesive = scene.law.cohesion().is_some();
-    let mu = match scene.law.mu() {
+    let cohesive = num.cohesive;
+    let mu = match num.mu {
         Mu::Finite(x) => Some(x),
         Mu::Infinite => None,
     };
@@ -52,7 +54,7 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
         format: snapshot::FORMAT.into(),
         version: snapshot::VERSION,
         code: checkpoint::code(),
-        scene: scene.name.clone(),
+        scene: scene.into(),
         dimension: D::D,
         time: sys.time,
         step: sys.step,

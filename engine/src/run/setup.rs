@@ -1,5 +1,6 @@
 //! From a scene to a system: the initial grains, the cell mass, the time step.
 
+use super::numerics::StageNumerics;
 use crate::cell::Cell;
 use crate::contact::from_scene::{hertz_mindlin_law, linear_law};
 use crate::contact::hertz_mindlin::HertzMindlin;
@@ -9,7 +10,7 @@ use crate::contact::ContactLaw;
 use crate::geometry::{Dim, Linear as _};
 use crate::init::{maxwell_velocities, random_gas};
 use crate::protocols::lattice;
-use crate::scene::{Arrangement, Law, Scene, Step};
+use crate::scene::{Arrangement, Law, Scene};
 use crate::snapshot::Snapshot;
 use crate::system::System;
 
@@ -107,18 +108,6 @@ fn snapshot_grains<D: Dim>(path: &std::path::Path, n: usize) -> Result<Grains<D>
     })
 }
 
-/// Largest pressure any step asks for (at least the force unit).
-fn force_scale(scene: &Scene) -> f64 {
-    scene
-        .stages()
-        .iter()
-        .filter_map(|(_, s)| match s {
-            Step::Compress { pressure, .. } => Some(*pressure),
-            _ => None,
-        })
-        .fold(1.0, f64::max)
-}
-
 /// Generalized mass of the cell, AR07 (7): `numerics.cell_mass` × the total grain mass,
 /// divided by the cell's linear size when `cell_mass_per_length` (GRC07 §II.A).
 pub fn cell_mass(numerics: &crate::scene::Numerics, total_mass: f64, volume: f64, d: usize) -> f64 {
@@ -158,23 +147,16 @@ pub fn system_of<D: Dim, L: ContactLaw<D>>(
     sys.u.clone_from(&grains.u);
     sys.time = grains.time;
     sys.step = grains.step;
-    let (dt, _) = time_step::<D, L>(scene, &sys);
+    let (dt, _) = StageNumerics::of_scene(scene).time_step(&sys);
     sys.dt = dt;
     sys.check_cell()?;
     Ok(sys)
 }
 
-/// Time step from the stiffest contact: `dt_fraction` of the binary contact duration
-/// π√(m_eff/K_max) of the two lightest grains. Returns (dt, K_max).
+/// The time step of `sys` with the numerics of `scene` ([`StageNumerics::time_step`]).
+/// Returns (dt, K_max).
 pub fn time_step<D: Dim, L: ContactLaw<D>>(scene: &Scene, sys: &System<D, L>) -> (f64, f64) {
-    let m_min = sys.mass.iter().cloned().fold(f64::INFINITY, f64::min);
-    let r_max = sys.radius.iter().cloned().fold(0.0, f64::max);
-    let k_max = sys.law.max_stiffness(
-        scene.numerics.stiffness_force * force_scale(scene),
-        0.5 * r_max,
-    );
-    let t_c = std::f64::consts::PI * (0.5 * m_min / k_max).sqrt();
-    (scene.numerics.dt_fraction * t_c, k_max)
+    StageNumerics::of_scene(scene).time_step(sys)
 }
 
 /// The time step our engine uses for `grains` at stiffness `kappa` (the scene's law with κ

@@ -4,16 +4,17 @@
 use super::checkpoint::{self, Checkpoint, Header};
 use super::checks::{contacts_at_threshold, measure, step_correlation, unstable};
 use super::checks::{FLIP_CHECKS, FLIP_CORRELATION};
+use super::numerics::StageNumerics;
 use super::options::{CheckpointSpec, RunOptions};
 use super::output::snapshot_of;
 use super::report::{Checks, Progress, RunError, StepEnd, StepReport};
-use super::setup::{build_system, initial_grains, time_step, Grains};
+use super::setup::{build_system, initial_grains, Grains};
 use crate::cell::Control;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, Linear as _};
 use crate::init::maxwell_velocities;
 use crate::protocols::event_driven::HardSpheres;
-use crate::scene::{ForceScale, Scene, Step};
+use crate::scene::{Scene, Step};
 use crate::snapshot::Snapshot;
 use crate::system::{State, System};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -236,8 +237,9 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     } else {
         "equilibrium"
     };
-    let snap = snapshot_of(sys, scene, status, ctx.pressure);
-    Ok((ctx.reports, snap, contacts_at_threshold(sys, scene)))
+    let num = StageNumerics::of_scene(scene);
+    let snap = snapshot_of(sys, &scene.name, &num, status, ctx.pressure);
+    Ok((ctx.reports, snap, contacts_at_threshold(sys, &num)))
 }
 
 /// The stages `range` on one system; returns whether the run was stopped.
@@ -254,16 +256,14 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
     let ke0 = sys.kinetic_energy() / n;
     let mut last_good = None;
     sys.save(&mut last_good);
-    let cohesive = scene.law.cohesion().is_some();
     let stage_count = ctx.stages.len();
     for k in range {
         let step = ctx.stages[k].1.clone();
         let kind = step.kind();
-        // κ of the stage (GRC07 §III.B.2 ramps), always scaled from the scene's law so that a
-        // resumed run has the same law bit for bit; the time step follows.
-        let factor = step.kappa().map_or(1.0, |k| k / scene.law.kappa());
-        sys.law = base_law.with_kappa_scaled(factor);
-        let (dt, k_max) = time_step::<D, L>(scene, sys);
+        let num = StageNumerics::of_stage(scene, &step, ctx.pressure);
+        // κ of the stage; the time step follows.
+        sys.law = base_law.with_kappa_scaled(num.kappa_factor);
+        let (dt, k_max) = num.time_step(sys);
         sys.dt = dt;
         ctx.dt = dt;
         ctx.k_max = k_max;
@@ -276,7 +276,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 ctx.pressure = Some(*p);
                 // Strain-rate cap: AR07 (23) I = ε̇√(m/(aP)) (time unit √(m/(aP)) for P > 0
                 // without cohesion), GRC08 I_a = ε̇ T0 with T0 = √(m a/F0) = 1 with cohesion.
-                let time_unit = if cohesive { 1.0 } else { 1.0 / p.sqrt() };
+                let time_unit = if num.cohesive { 1.0 } else { 1.0 / p.sqrt() };
                 let mut target = D::V::zero();
                 for a in 0..D::D {
                     target[a] = *p;
@@ -291,30 +291,17 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 sys.cell.ldot = D::V::zero();
             }
         }
-        let criteria = step.criteria();
-        let f_ref = match criteria.scale {
-            ForceScale::Pressure => ctx.pressure.unwrap_or(1.0),
-            ForceScale::Cohesion => ctx.pressure.unwrap_or(0.0).max(1.0),
-        };
-        let full_time = matches!(
-            step,
-            Step::FixedVolume {
-                full_time: true,
-                ..
-            }
-        );
-        let aggregate = matches!(step, Step::Aggregate { .. });
+        let (full_time, aggregate, max_time) = (num.full_time, num.aggregate, num.max_time);
         let (t0, steps0, wall0) = resume_at.take().unwrap_or((sys.time, sys.step, 0.0));
         let step_start = Instant::now();
-        let max_time = step.max_time();
         let end;
         let mut checks;
         let mut prev_force: Vec<D::V> = Vec::new();
         let mut prev_torque: Vec<D::Ang> = Vec::new();
         let mut flips = 0u32;
         loop {
-            for m in 0..scene.numerics.check_every {
-                if m + 1 == scene.numerics.check_every {
+            for m in 0..num.check_every {
+                if m + 1 == num.check_every {
                     prev_force.clear();
                     prev_force.extend_from_slice(&sys.force);
                     prev_torque.clear();
@@ -322,9 +309,10 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 }
                 sys.step();
                 let (ov, i, j) = sys.max_overlap;
-                if ov.is_nan() || ov > scene.numerics.max_overlap {
+                if ov.is_nan() || ov > num.max_overlap {
                     return Err(unstable(
-                        scene,
+                        &scene.name,
+                        &num,
                         sys,
                         &last_good,
                         if ov.is_nan() {
@@ -332,13 +320,13 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                         } else {
                             format!(
                                 "overlap of {ov:.3} times the smaller radius between grains {i} and {j} (limit numerics.max_overlap = {})",
-                                scene.numerics.max_overlap
+                                num.max_overlap
                             )
                         },
                     ));
                 }
             }
-            checks = measure(sys, &criteria, f_ref, &step);
+            checks = measure(sys, &num);
             if let Some(cb) = opts.progress.as_mut() {
                 cb(&Progress {
                     step_index: k,
@@ -363,7 +351,8 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             };
             if flips >= FLIP_CHECKS {
                 return Err(unstable(
-                    scene,
+                    &scene.name,
+                    &num,
                     sys,
                     &last_good,
                     format!(
@@ -378,15 +367,17 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 && sys.cell.l.is_finite();
             if !finite {
                 return Err(unstable(
-                    scene,
+                    &scene.name,
+                    &num,
                     sys,
                     &last_good,
                     "non-finite velocities, forces or cell lengths".into(),
                 ));
             }
-            if checks.kinetic_per_grain > 1e4 * (f_ref + ke0) {
+            if checks.kinetic_per_grain > 1e4 * (num.f_ref + ke0) {
                 return Err(unstable(
-                    scene,
+                    &scene.name,
+                    &num,
                     sys,
                     &last_good,
                     format!(
