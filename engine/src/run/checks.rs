@@ -6,7 +6,7 @@ use super::output::snapshot_of;
 use super::report::{Checks, RunError};
 use crate::cell::Control;
 use crate::contact::ContactLaw;
-use crate::geometry::{Dim, Linear as _};
+use crate::geometry::{Dim, VectorOps as _};
 use crate::system::{self, System};
 
 /// Number of clusters of `n` grains linked by interactions (contacts or distant attractions).
@@ -40,7 +40,7 @@ pub(super) const FLIP_CHECKS: u32 = 5;
 /// negative when the dominant mode has fewer than four steps per period (ω dt > π/2), the
 /// signature of a time step past the stability of the leapfrog/velocity-Verlet scheme
 /// (ω dt < 2). 1 when there is no force.
-pub(super) fn step_correlation<V: crate::geometry::Linear>(a: &[V], b: &[V]) -> f64 {
+pub(super) fn step_correlation<V: crate::geometry::VectorOps>(a: &[V], b: &[V]) -> f64 {
     let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
     for (x, y) in a.iter().zip(b) {
         ab += x.dot(y);
@@ -60,7 +60,7 @@ pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
     scene: &str,
     num: &StageNumerics,
     sys: &mut System<D, L>,
-    last_good: &Option<system::Checkpoint<D, L>>,
+    last_good: &Option<system::LastGood<D, L>>,
     what: String,
 ) -> RunError {
     let (_, k_max) = num.time_step(sys);

@@ -26,7 +26,7 @@ pub use setup::{
 };
 pub use stages::{compress_until, prepared_grains, run_protocol};
 
-use crate::contact::linear::{Cohesion, NoCohesion};
+use crate::contact::linear::{CohesionModel, NoCohesion};
 use crate::contact::slider::{Coulomb, Friction, Frictionless, NoRolling, NoSlip};
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, D2, D3};
@@ -171,7 +171,7 @@ fn dispatch_law<D: Dim>(
     }
 }
 
-fn linear_friction<D: Dim, C: Cohesion>(
+fn linear_friction<D: Dim, C: CohesionModel>(
     ctx: &mut Ctx<D>,
     c: C,
     mu: Mu,
@@ -186,7 +186,7 @@ fn linear_friction<D: Dim, C: Cohesion>(
     }
 }
 
-fn linear_rolling<D: Dim, C: Cohesion, F: Friction>(
+fn linear_rolling<D: Dim, C: CohesionModel, F: Friction>(
     ctx: &mut Ctx<D>,
     c: C,
     f: F,

@@ -3,7 +3,7 @@
 use super::checkpoint;
 use super::numerics::StageNumerics;
 use crate::contact::ContactLaw;
-use crate::geometry::{Dim, Linear as _};
+use crate::geometry::{Dim, VectorOps as _};
 use crate::scene::Mu;
 use crate::snapshot::{self, Snapshot};
 use crate::system::System;

@@ -7,7 +7,7 @@ use crate::contact::hertz_mindlin::HertzMindlin;
 use crate::contact::linear::{Linear, NoCohesion};
 use crate::contact::slider::{Frictionless, NoRolling};
 use crate::contact::ContactLaw;
-use crate::geometry::{Dim, Linear as _};
+use crate::geometry::{Dim, VectorOps as _};
 use crate::init::{maxwell_velocities, random_gas};
 use crate::protocols::lattice;
 use crate::scene::{Arrangement, Law, Scene};

@@ -11,7 +11,7 @@ use super::report::{Checks, Progress, RunError, StepEnd, StepReport};
 use super::setup::{build_system, initial_grains, Grains};
 use crate::cell::Control;
 use crate::contact::ContactLaw;
-use crate::geometry::{Dim, Linear as _};
+use crate::geometry::{Dim, VectorOps as _};
 use crate::init::maxwell_velocities;
 use crate::protocols::event_driven::HardSpheres;
 use crate::scene::{Scene, Step};
