@@ -5,7 +5,7 @@
 //! Layout: [`geometry`] (2D/3D abstraction), [`cell`] (periodic cell and barostat, AR07 (6)–(8)),
 //! [`contact`] (contact laws), [`neighbor`] (cell lists + Verlet skin), [`system`] (state and
 //! integrator), [`init`] (random gas), [`scene`] (scene files), [`run`] (protocols, equilibrium
-//! criteria, blow-up detection), [`snapshot`] (on-disk configurations), [`library`] (embedded
+//! criteria, blow-up detection, checkpoints), [`snapshot`] (on-disk configurations), [`library`] (embedded
 //! scenes), [`protocols`] (event-driven hard grains, Lubachevsky–Stillinger growth, FCC).
 
 pub mod cell;

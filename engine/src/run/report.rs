@@ -89,7 +89,7 @@ impl StepEnd {
 /// Report of one protocol stage.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct StepReport {
-    /// Stage index in [`Scene::stages`].
+    /// Stage index in [`Scene::stages`](crate::scene::Scene::stages).
     pub index: usize,
     pub kind: String,
     pub end: StepEnd,

@@ -1,6 +1,6 @@
 //! Scene files: one TOML file per scene (`reference-inputs/scenes/*.toml`).
 //!
-//! Everything is dimensionless, in the reduced units of [`crate::units`]: lengths in units of
+//! Everything is dimensionless, in reduced units: lengths in units of
 //! the largest diameter `a`, masses in units of the mass of a grain of diameter `a`, forces in
 //! units of `F0` (cohesive laws) or of `P_ref·a^(d-1)` (cohesionless laws), so that pressures
 //! in the protocol are `P/P_ref` or `P* = P a/F0` (GRC07 (12)).
