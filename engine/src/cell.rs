@@ -1,6 +1,6 @@
 //! Orthorhombic periodic cell with variable lengths and the stress control of AR07 (6)–(8).
 
-use crate::geometry::{Dim, Linear, Tensor};
+use crate::geometry::{Dim, Tensor, VectorOps};
 
 /// How the cell lengths evolve.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -7,7 +7,7 @@ use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
 /// Arithmetic shared by position vectors and angular quantities.
-pub trait Linear:
+pub trait VectorOps:
     Copy
     + Debug
     + Default
@@ -37,7 +37,7 @@ pub trait Linear:
     fn to_vec(&self) -> Vec<f64>;
 }
 
-impl Linear for f64 {
+impl VectorOps for f64 {
     #[inline(always)]
     fn zero() -> Self {
         0.0
@@ -57,7 +57,7 @@ impl Linear for f64 {
 
 macro_rules! impl_linear_vec {
     ($t:ty) => {
-        impl Linear for $t {
+        impl VectorOps for $t {
             #[inline(always)]
             fn zero() -> Self {
                 <$t>::zeros()
@@ -83,12 +83,12 @@ impl_linear_vec!(Vector3<f64>);
 pub trait Dim: Copy + Clone + Debug + Default + Send + Sync + 'static {
     const D: usize;
     /// Position, velocity and force vectors.
-    type V: Linear
+    type V: VectorOps
         + std::ops::Index<usize, Output = f64>
         + std::ops::IndexMut<usize>
         + std::ops::Div<f64, Output = Self::V>;
     /// Angular velocity, moment and rotation (scalar in 2D, vector in 3D).
-    type Ang: Linear;
+    type Ang: VectorOps;
 
     fn from_slice(x: &[f64]) -> Self::V;
     /// Component-wise product.
@@ -236,7 +236,7 @@ impl Dim for D3 {
 /// Projects `t` onto the plane normal to the unit vector `n`, keeping its magnitude: the
 /// rolling part of the transport of a contact force with its contact (AR07 (B3)–(B4)).
 #[inline(always)]
-pub fn keep_norm_in_plane<V: Linear>(t: V, n: V) -> V {
+pub fn keep_norm_in_plane<V: VectorOps>(t: V, n: V) -> V {
     let before = t.norm_squared();
     keep_norm_in_plane_with(t, n, before, 1.0 / before)
 }
@@ -244,7 +244,7 @@ pub fn keep_norm_in_plane<V: Linear>(t: V, n: V) -> V {
 /// [`keep_norm_in_plane`] given |t|² and its inverse, which depend on `t` only: the caller
 /// computes them before `n` is known, so the division overlaps the contact geometry.
 #[inline(always)]
-pub fn keep_norm_in_plane_with<V: Linear>(t: V, n: V, before: f64, inv_before: f64) -> V {
+pub fn keep_norm_in_plane_with<V: VectorOps>(t: V, n: V, before: f64, inv_before: f64) -> V {
     if before == 0.0 {
         return t;
     }

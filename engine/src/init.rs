@@ -1,7 +1,7 @@
 //! Initial states: a random non-overlapping granular gas at solid fraction Φ_I (GRC07 §III.A,
 //! AR07 §IV.A), by random sequential addition with a cell grid, largest grains first.
 
-use crate::geometry::{Dim, Linear};
+use crate::geometry::{Dim, VectorOps};
 use crate::neighbor::min_image;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

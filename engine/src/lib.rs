@@ -5,11 +5,10 @@
 //! Layout: [`geometry`] (2D/3D abstraction), [`cell`] (periodic cell and barostat, AR07 (6)–(8)),
 //! [`contact`] (contact laws), [`neighbor`] (cell lists + Verlet skin), [`system`] (state and
 //! integrator), [`init`] (random gas), [`scene`] (scene files), [`run`] (protocols, equilibrium
-//! criteria, blow-up detection), [`snapshot`] (on-disk configurations), [`library`] (embedded
+//! criteria, blow-up detection, checkpoints), [`snapshot`] (on-disk configurations), [`library`] (embedded
 //! scenes), [`protocols`] (event-driven hard grains, Lubachevsky–Stillinger growth, FCC).
 
 pub mod cell;
-pub mod checkpoint;
 pub mod contact;
 pub mod geometry;
 pub mod init;
@@ -21,6 +20,7 @@ pub mod scene;
 pub mod snapshot;
 pub mod system;
 
+pub use run::checkpoint;
 pub use run::{run_scene, Outcome, RunError, RunOptions};
 pub use scene::Scene;
 pub use snapshot::Snapshot;

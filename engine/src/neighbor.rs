@@ -6,7 +6,7 @@
 //! index lets each grain gather the forces of the pairs where it is the second member, so the
 //! force sums are computed in a fixed order whatever the number of threads.
 
-use crate::geometry::{Dim, Linear};
+use crate::geometry::{Dim, VectorOps};
 use rayon::prelude::*;
 
 /// Rows handled per parallel task: fixed, so results do not depend on the thread count.
@@ -291,10 +291,10 @@ pub fn min_image<D: Dim>(ds: &mut D::V) {
     }
 }
 
-/// Wraps a reduced position into [0, 1) (grains move far less than a cell per step, so
-/// one shift is the common case; `floor` handles the rest).
+/// Wraps a reduced position moved by a time step into [0, 1) (grains move far less than a
+/// cell per step, so one shift is the common case; `floor` handles the rest).
 #[inline(always)]
-pub fn wrap<D: Dim>(s: &mut D::V) {
+pub fn wrap_moved<D: Dim>(s: &mut D::V) {
     for a in 0..D::D {
         let mut x = s[a];
         if x >= 1.0 {

@@ -6,8 +6,8 @@
 
 use crate::cell::Cell;
 use crate::contact::{ContactLaw, Pair, PairForce};
-use crate::geometry::{add_outer, Dim, Linear, Tensor};
-use crate::neighbor::{min_image, wrap, NeighborList, ROW_CHUNK};
+use crate::geometry::{add_outer, Dim, Tensor, VectorOps};
+use crate::neighbor::{min_image, wrap_moved, NeighborList, ROW_CHUNK};
 use rayon::prelude::*;
 
 /// Grains handled per parallel task in the per-grain loops.
@@ -65,7 +65,7 @@ struct Job<'a, H, V, A> {
 }
 
 /// Grain i of a pair, loaded once per row of the force pass.
-struct Grain<D: Dim> {
+struct RowGrain<D: Dim> {
     s: D::V,
     u: D::V,
     w: D::Ang,
@@ -123,7 +123,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         };
         sys.r_max = sys.radius.iter().cloned().fold(0.0, f64::max);
         for x in sys.s.iter_mut() {
-            wrap::<D>(x);
+            wrap_moved::<D>(x);
         }
         sys
     }
@@ -237,7 +237,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                         u[k] = v;
                         let step = v * dt;
                         s[k] += D::mul(step, inv_l);
-                        wrap::<D>(&mut s[k]);
+                        wrap_moved::<D>(&mut s[k]);
                         disp[k] += step;
                         m = m.max(disp[k].norm_squared());
                         if L::MOMENTS {
@@ -285,8 +285,8 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
 
     /// What the force pass reads of grain i, loaded once per row.
     #[inline(always)]
-    fn grain(&self, i: usize) -> Grain<D> {
-        Grain {
+    fn grain(&self, i: usize) -> RowGrain<D> {
+        RowGrain {
             s: self.s[i],
             u: self.u[i],
             w: if L::MOMENTS {
@@ -303,7 +303,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     #[inline(always)]
     fn pair_with(
         &self,
-        gi: &Grain<D>,
+        gi: &RowGrain<D>,
         j: usize,
         erate: &D::V,
         range: f64,
@@ -597,11 +597,12 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     }
 }
 
-/// The state needed to restart from a step: positions, velocities, cell, and the contact
-/// history with the list it belongs to. Everything else (forces, pair buffers, the transposed
-/// index, displacements) is derived, so a checkpoint costs less than half a [`System`].
+/// The last good state, in memory, that a blown-up run returns to (not the checkpoint file,
+/// [`crate::checkpoint::Checkpoint`]): positions, velocities, cell, and the contact history
+/// with the list it belongs to. Everything else (forces, pair buffers, the transposed index,
+/// displacements) is derived, so it costs less than half a [`System`].
 #[derive(Clone, Debug)]
-pub struct Checkpoint<D: Dim, L: ContactLaw<D>> {
+pub struct LastGood<D: Dim, L: ContactLaw<D>> {
     s: Vec<D::V>,
     u: Vec<D::V>,
     w: Vec<D::Ang>,
@@ -615,10 +616,10 @@ pub struct Checkpoint<D: Dim, L: ContactLaw<D>> {
 
 impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// Copies the restart state into `cp`, reusing its allocations.
-    pub fn save(&self, cp: &mut Option<Checkpoint<D, L>>) {
+    pub fn save(&self, cp: &mut Option<LastGood<D, L>>) {
         match cp {
             None => {
-                *cp = Some(Checkpoint {
+                *cp = Some(LastGood {
                     s: self.s.clone(),
                     u: self.u.clone(),
                     w: self.w.clone(),
@@ -644,9 +645,9 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         }
     }
 
-    /// Returns to a checkpoint: state restored, list rebuilt (keeping the saved history) and
+    /// Returns to a saved state: state restored, list rebuilt (keeping the saved history) and
     /// forces evaluated without advancing any spring.
-    pub fn restore(&mut self, cp: &Checkpoint<D, L>) {
+    pub fn restore(&mut self, cp: &LastGood<D, L>) {
         self.s.clone_from(&cp.s);
         self.u.clone_from(&cp.u);
         self.w.clone_from(&cp.w);

@@ -15,7 +15,7 @@ use grainbench_engine::contact::hertz_mindlin::HertzMindlin;
 use grainbench_engine::contact::linear::{Adhesion, Linear, NoCohesion};
 use grainbench_engine::contact::slider::{Coulomb, Frictionless, NoRolling, NoSlip, RollingSpring};
 use grainbench_engine::contact::ContactLaw;
-use grainbench_engine::geometry::{Dim, Linear as _, D2, D3};
+use grainbench_engine::geometry::{Dim, VectorOps as _, D2, D3};
 use grainbench_engine::init::{maxwell_velocities, random_gas};
 use grainbench_engine::neighbor::min_image;
 use grainbench_engine::system::System;

@@ -15,7 +15,7 @@ use grainbench_comparisons::plots::{line_plot, Axis, LinePlot, Marks, Series};
 use grainbench_comparisons::stats::Stat;
 use grainbench_engine::cell::{Cell, Control};
 use grainbench_engine::contact::slider::Coulomb;
-use grainbench_engine::geometry::{Dim, Linear as _, D3};
+use grainbench_engine::geometry::{Dim, VectorOps as _, D3};
 use grainbench_engine::run::{cell_mass, compress_until, hertz_mindlin_law, time_step};
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;

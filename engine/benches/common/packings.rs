@@ -9,7 +9,7 @@ use grainbench_engine::geometry::Dim;
 use grainbench_engine::run::{
     adhesion, compress_until, hertz_mindlin_law, linear_law, rolling_spring,
 };
-use grainbench_engine::scene::{Law, Scene};
+use grainbench_engine::scene::Scene;
 use grainbench_engine::system::System;
 use std::path::Path;
 use std::time::Instant;
@@ -82,10 +82,7 @@ pub fn law_3d<F>(scene: &Scene, f: F) -> HertzMindlin<F> {
 
 pub fn law_2d(scene: &Scene) -> Linear<Adhesion, Coulomb, RollingSpring> {
     let law = &scene.law;
-    let mu = match law {
-        Law::Linear { mu, .. } => mu.value(),
-        _ => unreachable!(),
-    };
+    let mu = law.mu().value();
     let cohesion = adhesion(&law.cohesion().expect("cohesive bench scene"));
     let rolling = rolling_spring(law).expect("bench scene with rolling resistance");
     linear_law(law, cohesion, Coulomb { mu }, rolling)

@@ -2,7 +2,7 @@
 
 use super::slider::Friction;
 use super::{ContactLaw, Pair, PairForce};
-use crate::geometry::{Dim, Linear};
+use crate::geometry::{Dim, VectorOps};
 
 /// Hertz normal force with Mindlin tangential stiffness, Walton rescaling on unloading and
 /// viscous normal damping at a fraction ζ of critical. `F` selects the friction kind

@@ -4,10 +4,10 @@
 
 use super::slider::{Friction, RollingResistance};
 use super::{ContactLaw, Pair, PairForce};
-use crate::geometry::{Dim, Linear as _};
+use crate::geometry::{Dim, VectorOps as _};
 
 /// Adhesion or its absence.
-pub trait Cohesion: Copy + Send + Sync + std::fmt::Debug + 'static {
+pub trait CohesionModel: Copy + Send + Sync + std::fmt::Debug + 'static {
     const ACTIVE: bool;
     /// Pull-off force F0.
     fn f0(&self) -> f64;
@@ -26,7 +26,7 @@ pub struct Adhesion {
     pub d0: f64,
 }
 
-impl Cohesion for NoCohesion {
+impl CohesionModel for NoCohesion {
     const ACTIVE: bool = false;
     #[inline(always)]
     fn f0(&self) -> f64 {
@@ -38,7 +38,7 @@ impl Cohesion for NoCohesion {
     }
 }
 
-impl Cohesion for Adhesion {
+impl CohesionModel for Adhesion {
     const ACTIVE: bool = true;
     #[inline(always)]
     fn f0(&self) -> f64 {
@@ -71,7 +71,9 @@ pub struct LinearHistory<T, G> {
     pub rolling: G,
 }
 
-impl<D: Dim, C: Cohesion, F: Friction, R: RollingResistance> ContactLaw<D> for Linear<C, F, R> {
+impl<D: Dim, C: CohesionModel, F: Friction, R: RollingResistance> ContactLaw<D>
+    for Linear<C, F, R>
+{
     type History = LinearHistory<F::State<D>, R::State<D>>;
     const MOMENTS: bool = F::ACTIVE || R::ACTIVE;
     const ROLLING: bool = R::ACTIVE;

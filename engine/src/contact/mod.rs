@@ -6,7 +6,9 @@
 //! - [`linear::Linear`]: GRC07 (4)–(10): spring–dashpot–Coulomb with optional adhesion and
 //!   rolling resistance; with no adhesion it is the classic cohesionless linear law.
 //! - [`slider`]: the elastic-plastic sliders (Coulomb and rolling) shared by both.
+//! - [`from_scene`]: the law of a scene's `[law]` table, in reduced units.
 
+pub mod from_scene;
 pub mod hertz_mindlin;
 pub mod linear;
 pub mod slider;

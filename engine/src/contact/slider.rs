@@ -3,7 +3,7 @@
 //! (GRC07 (10)). Each kind is a type, so an absent feature has no state and no cost.
 
 use super::PairState;
-use crate::geometry::{keep_norm_in_plane_with, Dim, Linear};
+use crate::geometry::{keep_norm_in_plane_with, Dim, VectorOps};
 
 /// Sliding friction between grains.
 pub trait Friction: Copy + Send + Sync + std::fmt::Debug + 'static {

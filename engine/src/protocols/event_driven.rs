@@ -20,7 +20,7 @@
 //! time unit follows. Collision counts "per grain" are 2 × (pair collisions) / n: the average
 //! number of collisions each grain took part in (AR07 §IV.B, n_coll = 50).
 
-use crate::geometry::{Dim, Linear};
+use crate::geometry::{Dim, VectorOps};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
@@ -139,7 +139,7 @@ impl<D: Dim> HardSpheres<D> {
         };
         hs.check_box(hs.max_diameter())?;
         for x in hs.s.iter_mut() {
-            wrap::<D>(x);
+            wrap_floor::<D>(x);
         }
         if let Some((i, j, overlap)) = hs.max_overlap() {
             if overlap > OVERLAP_TOL {
@@ -209,7 +209,7 @@ impl<D: Dim> HardSpheres<D> {
         }
         let mut s = self.s.clone();
         for x in s.iter_mut() {
-            wrap::<D>(x);
+            wrap_floor::<D>(x);
         }
         let grid = Grid::<D>::new(self.l, self.max_diameter() * (1.0 + CELL_MARGIN), &s);
         let mut worst: Option<(usize, usize, f64)> = None;
@@ -433,8 +433,8 @@ impl<D: Dim> HardSpheres<D> {
     }
 }
 
-/// Wraps a reduced position into [0,1).
-fn wrap<D: Dim>(s: &mut D::V) {
+/// Wraps a reduced position into [0,1) by subtracting its floor.
+fn wrap_floor<D: Dim>(s: &mut D::V) {
     for a in 0..D::D {
         let mut x = s[a] - s[a].floor();
         if x >= 1.0 {
@@ -611,7 +611,7 @@ enum Halt {
 /// position at time `stamp`, the absolute velocity, the radius at the start of the run.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-struct Grain<D: Dim> {
+struct StampedGrain<D: Dim> {
     s: D::V,
     v: D::V,
     stamp: f64,
@@ -622,7 +622,7 @@ struct Grain<D: Dim> {
 /// written back to [`HardSpheres`] at the end); time counts from the start of the run.
 struct Engine<D: Dim> {
     grid: Grid<D>,
-    grains: Vec<Grain<D>>,
+    grains: Vec<StampedGrain<D>>,
     inv_l: D::V,
     /// Prediction counters (heap entry validity).
     pred: Vec<u32>,
@@ -668,14 +668,14 @@ impl<D: Dim> Engine<D> {
     fn new(hs: &mut HardSpheres<D>, width: f64, g: f64) -> Self {
         let n = hs.len();
         for x in hs.s.iter_mut() {
-            wrap::<D>(x);
+            wrap_floor::<D>(x);
         }
         let mut inv_l = D::V::zero();
         for a in 0..D::D {
             inv_l[a] = 1.0 / hs.l[a];
         }
         let grains = (0..n)
-            .map(|i| Grain {
+            .map(|i| StampedGrain {
                 s: hs.s[i],
                 v: hs.vel[i],
                 stamp: 0.0,
@@ -715,7 +715,7 @@ impl<D: Dim> Engine<D> {
         for i in 0..self.grains.len() {
             self.advance(i);
             hs.s[i] = self.grains[i].s;
-            wrap::<D>(&mut hs.s[i]);
+            wrap_floor::<D>(&mut hs.s[i]);
             hs.vel[i] = self.grains[i].v;
         }
     }
@@ -728,7 +728,7 @@ impl<D: Dim> Engine<D> {
     /// Pushes the earliest event of grain i (already advanced to the current time).
     fn predict(&mut self, l: D::V, i: usize) {
         let t = self.t;
-        let Grain { s: si, v: vi, .. } = self.grains[i];
+        let StampedGrain { s: si, v: vi, .. } = self.grains[i];
         let ri = self.grains[i].r;
         let sdi = D::mul(vi, self.inv_l);
         let mut best = f64::INFINITY;

@@ -20,7 +20,7 @@ pub mod yade;
 pub use super::code::{which, Code};
 pub use capability::{features, Feature, Support};
 
-use grainbench_engine::geometry::{Dim, Linear as _, D2, D3};
+use grainbench_engine::geometry::{Dim, VectorOps as _, D2, D3};
 use grainbench_engine::run::{prepared_grains, time_step_for, Grains};
 use grainbench_engine::scene::{Criteria, ForceScale, Law, Mu, Scene, Step};
 use std::fmt;

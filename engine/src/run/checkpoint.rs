@@ -4,7 +4,7 @@
 //! neighbour list and contact history). Binary (bincode), written atomically, so an
 //! interrupted write leaves the previous checkpoint intact.
 
-use crate::run::StepReport;
+use super::report::StepReport;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
 use std::path::Path;

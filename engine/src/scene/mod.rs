@@ -1,6 +1,6 @@
 //! Scene files: one TOML file per scene (`reference-inputs/scenes/*.toml`).
 //!
-//! Everything is dimensionless, in the reduced units of [`crate::units`]: lengths in units of
+//! Everything is dimensionless, in reduced units: lengths in units of
 //! the largest diameter `a`, masses in units of the mass of a grain of diameter `a`, forces in
 //! units of `F0` (cohesive laws) or of `P_ref·a^(d-1)` (cohesionless laws), so that pressures
 //! in the protocol are `P/P_ref` or `P* = P a/F0` (GRC07 (12)).
@@ -8,9 +8,13 @@
 //! Parsing rejects unknown keys; [`Scene::validate`] checks every value and names the file,
 //! the field and what is allowed.
 
+mod validate;
+
+pub use validate::{max_random_packing_fraction, SceneError};
+
 use serde::{Deserialize, Serialize};
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// A whole scene.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
@@ -546,384 +550,6 @@ impl Default for Output {
     }
 }
 
-/// An error in a scene file, naming the file, the field and what is allowed.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SceneError {
-    pub file: PathBuf,
-    /// Dotted path of the field (`law.kappa`, `protocol[1].pressure`), empty for syntax errors.
-    pub field: String,
-    pub message: String,
-}
-
-impl fmt::Display for SceneError {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        if self.field.is_empty() {
-            write!(f, "scene {}: {}", self.file.display(), self.message)
-        } else {
-            write!(
-                f,
-                "scene {}: field `{}`: {}",
-                self.file.display(),
-                self.field,
-                self.message
-            )
-        }
-    }
-}
-
-impl std::error::Error for SceneError {}
-
-/// Largest Φ_I a random sequential placement reaches in reasonable time (RSA jamming limits:
-/// 0.547 for disks, 0.384 for spheres, a little less to leave room).
-pub fn max_random_packing_fraction(dimension: usize) -> f64 {
-    if dimension == 2 {
-        0.54
-    } else {
-        0.37
-    }
-}
-
-impl Scene {
-    /// Parses and validates a scene file.
-    pub fn from_file(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: path.to_owned(),
-            field: String::new(),
-            message: format!("cannot read the file: {e}"),
-        })?;
-        Self::from_toml(&text, path)
-    }
-
-    /// Parses and validates scene text; `path` is used in messages only.
-    pub fn from_toml(text: &str, path: &Path) -> Result<Scene, SceneError> {
-        let scene: Scene = toml::from_str(text).map_err(|e| SceneError {
-            file: path.to_owned(),
-            field: String::new(),
-            message: e.to_string().trim_end().to_string(),
-        })?;
-        scene.validate(path)?;
-        Ok(scene)
-    }
-
-    /// Checks every value; the first problem found is returned.
-    pub fn validate(&self, path: &Path) -> Result<(), SceneError> {
-        let err = |field: &str, message: String| SceneError {
-            file: path.to_owned(),
-            field: field.to_string(),
-            message,
-        };
-        let positive = |field: &str, x: f64| -> Result<(), SceneError> {
-            if x.is_finite() && x > 0.0 {
-                Ok(())
-            } else {
-                Err(err(field, format!("must be a finite number > 0, got {x}")))
-            }
-        };
-        let in_range = |field: &str, x: f64, lo: f64, hi: f64| -> Result<(), SceneError> {
-            if x.is_finite() && x >= lo && x <= hi {
-                Ok(())
-            } else {
-                Err(err(field, format!("must lie in [{lo}, {hi}], got {x}")))
-            }
-        };
-        if self.name.trim().is_empty()
-            || !self
-                .name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
-        {
-            return Err(err(
-                "name",
-                format!(
-                    "must be non-empty and use only letters, digits, '-', '_' and '.', got {:?}",
-                    self.name
-                ),
-            ));
-        }
-        if self.dimension != 2 && self.dimension != 3 {
-            return Err(err(
-                "dimension",
-                format!("must be 2 (disks) or 3 (spheres), got {}", self.dimension),
-            ));
-        }
-        if self.particles.count < 2 {
-            return Err(err(
-                "particles.count",
-                format!("needs at least 2 grains, got {}", self.particles.count),
-            ));
-        }
-        if self.particles.count > u32::MAX as usize / 64 {
-            return Err(err(
-                "particles.count",
-                format!(
-                    "at most {} grains are supported, got {}",
-                    u32::MAX as usize / 64,
-                    self.particles.count
-                ),
-            ));
-        }
-        let dmin = self.particles.min_diameter;
-        if !(dmin.is_finite() && dmin > 0.0 && dmin <= 1.0) {
-            return Err(err(
-                "particles.min_diameter",
-                format!("must lie in (0, 1] (units of the largest diameter a), got {dmin}"),
-            ));
-        }
-        let check_mu = |field: &str, mu: Mu| -> Result<(), SceneError> {
-            match mu {
-                Mu::Infinite => Ok(()),
-                Mu::Finite(x) if x.is_finite() && x >= 0.0 => Ok(()),
-                Mu::Finite(x) => Err(err(
-                    field,
-                    format!("must be a number ≥ 0 or \"inf\", got {x}"),
-                )),
-            }
-        };
-        match &self.law {
-            Law::HertzMindlin {
-                kappa,
-                mu,
-                zeta,
-                poisson,
-            } => {
-                if self.dimension != 3 {
-                    return Err(err(
-                        "law.kind",
-                        "\"hertz-mindlin\" needs dimension = 3 (Hertz contacts are between spheres); use kind = \"linear\" for disks".into(),
-                    ));
-                }
-                positive("law.kappa", *kappa)?;
-                check_mu("law.mu", *mu)?;
-                in_range("law.zeta", *zeta, 0.0, 1.0)?;
-                if !(poisson.is_finite() && *poisson > -1.0 && *poisson < 0.5) {
-                    return Err(err(
-                        "law.poisson",
-                        format!("must lie in (-1, 0.5), got {poisson}"),
-                    ));
-                }
-            }
-            Law::Linear {
-                kappa,
-                mu,
-                zeta,
-                kt_over_kn,
-                cohesion,
-                rolling,
-                tangential_damping,
-            } => {
-                in_range("law.tangential_damping", *tangential_damping, 0.0, 1.0)?;
-                positive("law.kappa", *kappa)?;
-                check_mu("law.mu", *mu)?;
-                in_range("law.zeta", *zeta, 0.0, 1.0)?;
-                positive("law.kt_over_kn", *kt_over_kn)?;
-                if let Some(c) = cohesion {
-                    if !(c.d0.is_finite() && c.d0 > 0.0 && c.d0 < 0.5 * dmin) {
-                        return Err(err(
-                            "law.cohesion.d0",
-                            format!(
-                                "must lie in (0, {}) (units of a; less than the smallest radius), got {}",
-                                0.5 * dmin,
-                                c.d0
-                            ),
-                        ));
-                    }
-                }
-                if let Some(r) = rolling {
-                    positive("law.rolling.kr", r.kr)?;
-                    if !(r.mu_r.is_finite() && r.mu_r >= 0.0) {
-                        return Err(err(
-                            "law.rolling.mu_r",
-                            format!("must be a finite number ≥ 0 (units of a), got {}", r.mu_r),
-                        ));
-                    }
-                }
-            }
-        }
-        let phi = self.initial.packing_fraction;
-        match self.initial.arrangement {
-            Arrangement::Random => {
-                let phi_max = max_random_packing_fraction(self.dimension);
-                if !(phi.is_finite() && phi > 0.0 && phi <= phi_max) {
-                    return Err(err(
-                        "initial.packing_fraction",
-                        format!(
-                            "must lie in (0, {phi_max}]: a random sequential placement of {} cannot reach {phi}",
-                            if self.dimension == 2 { "disks" } else { "spheres" }
-                        ),
-                    ));
-                }
-            }
-            Arrangement::Fcc => {
-                let n = self.particles.count;
-                let k = (0..=1000usize).find(|k| 4 * k * k * k >= n).unwrap_or(0);
-                if self.dimension != 3 || 4 * k * k * k != n || dmin != 1.0 {
-                    return Err(err(
-                        "initial.arrangement",
-                        format!("\"fcc\" needs dimension = 3, equal diameters (particles.min_diameter = 1) and particles.count = 4k³ (500, 864, 2048, 4000, …), got dimension {} and {n} grains", self.dimension),
-                    ));
-                }
-                let fcc_max = std::f64::consts::PI / (3.0 * 2f64.sqrt());
-                if !(phi.is_finite() && phi > 0.0 && phi < fcc_max) {
-                    return Err(err(
-                        "initial.packing_fraction",
-                        format!("must lie in (0, {fcc_max:.4}) for an FCC lattice, got {phi}"),
-                    ));
-                }
-            }
-        }
-        if !(self.initial.rms_velocity.is_finite() && self.initial.rms_velocity >= 0.0) {
-            return Err(err(
-                "initial.rms_velocity",
-                format!(
-                    "must be a finite number ≥ 0, got {}",
-                    self.initial.rms_velocity
-                ),
-            ));
-        }
-        let n = &self.numerics;
-        in_range("numerics.dt_fraction", n.dt_fraction, 1e-6, 0.5)?;
-        positive("numerics.stiffness_force", n.stiffness_force)?;
-        in_range("numerics.skin", n.skin, 1e-4, 1.0)?;
-        positive("numerics.cell_mass", n.cell_mass)?;
-        if n.check_every == 0 {
-            return Err(err("numerics.check_every", "must be ≥ 1".into()));
-        }
-        in_range("numerics.max_overlap", n.max_overlap, 1e-6, 1.0)?;
-        if self.protocol.is_empty() {
-            return Err(err(
-                "protocol",
-                "needs at least one step ([[protocol]] with kind = \"compress\", \"fixed-volume\", \"aggregate\", \"pressure-program\", \"hard-sphere-mix\", \"grow\" or \"expand\")"
-                    .into(),
-            ));
-        }
-        let cohesive = self.law.cohesion().is_some();
-        for (k, step) in self.protocol.iter().enumerate() {
-            let f = |name: &str| format!("protocol[{k}].{name}");
-            let check_pressure = |name: &str, pressure: f64| -> Result<(), SceneError> {
-                if !(pressure.is_finite() && pressure >= 0.0) {
-                    return Err(err(
-                        &f(name),
-                        format!("must be a finite number ≥ 0, got {pressure}"),
-                    ));
-                }
-                if pressure == 0.0 && !cohesive {
-                    return Err(err(
-                        &f(name),
-                        "must be > 0 without cohesion (a cohesionless packing cannot hold at P = 0)"
-                            .into(),
-                    ));
-                }
-                Ok(())
-            };
-            // Levels of a program: each the previous one times (or divided by) the factor.
-            let check_factor = |factor: f64| -> Result<(), SceneError> {
-                if factor.is_finite() && factor > 1.0 + 1e-6 && factor <= 100.0 {
-                    Ok(())
-                } else {
-                    Err(err(
-                        &f("factor"),
-                        format!("must lie in (1, 100] (each level is the previous one times or divided by it), got {factor}"),
-                    ))
-                }
-            };
-            match step {
-                Step::Compress {
-                    pressure,
-                    inertia_cap,
-                    ..
-                } => {
-                    check_pressure("pressure", *pressure)?;
-                    positive(&f("inertia_cap"), *inertia_cap)?;
-                }
-                Step::PressureProgram {
-                    from,
-                    to,
-                    factor,
-                    inertia_cap,
-                    ..
-                } => {
-                    check_pressure("from", *from)?;
-                    check_pressure("to", *to)?;
-                    if *from == 0.0 || *to == 0.0 {
-                        return Err(err(
-                            &f(if *from == 0.0 { "from" } else { "to" }),
-                            "must be > 0 (levels are multiples of each other)".into(),
-                        ));
-                    }
-                    check_factor(*factor)?;
-                    positive(&f("inertia_cap"), *inertia_cap)?;
-                }
-                Step::KappaRamp {
-                    from,
-                    to,
-                    factor,
-                    pressure,
-                    inertia_cap,
-                    ..
-                } => {
-                    positive(&f("from"), *from)?;
-                    positive(&f("to"), *to)?;
-                    check_pressure("pressure", *pressure)?;
-                    check_factor(*factor)?;
-                    positive(&f("inertia_cap"), *inertia_cap)?;
-                }
-                Step::HardSphereMix {
-                    collisions_per_grain,
-                } => in_range(&f("collisions_per_grain"), *collisions_per_grain, 1e-3, 1e6)?,
-                Step::Grow {
-                    packing_fraction,
-                    rate,
-                } => {
-                    let top = if self.dimension == 2 { 0.9 } else { 0.74 };
-                    in_range(&f("packing_fraction"), *packing_fraction, 0.0, top)?;
-                    in_range(&f("rate"), *rate, 1e-9, 10.0)?;
-                }
-                Step::Expand { factor } => in_range(&f("factor"), *factor, 1.0, 2.0)?,
-                Step::FixedVolume { .. } | Step::Aggregate { .. } => {}
-            }
-            if let Some(mu) = step.mu() {
-                check_mu(&f("mu"), mu)?;
-            }
-            if let Some(kappa) = step.kappa() {
-                positive(&f("kappa"), kappa)?;
-            }
-            if step.is_dem() {
-                positive(&f("max_time"), step.max_time())?;
-                let c = step.criteria();
-                positive(&f("criteria.force"), c.force)?;
-                positive(&f("criteria.moment"), c.moment)?;
-                positive(&f("criteria.pressure"), c.pressure)?;
-                positive(&f("criteria.kinetic"), c.kinetic)?;
-                if c.scale == ForceScale::Cohesion && !cohesive {
-                    return Err(err(
-                        &f("criteria.scale"),
-                        "\"cohesion\" needs a cohesive law (law.cohesion); use \"pressure\"".into(),
-                    ));
-                }
-            }
-            if matches!(step, Step::Aggregate { .. }) && !cohesive {
-                return Err(err(
-                    &f("kind"),
-                    "\"aggregate\" needs a cohesive law (law.cohesion): cohesionless grains never form one cluster".into(),
-                ));
-            }
-        }
-        if self.output.snapshot.is_empty()
-            || self.output.snapshot.contains('/')
-            || self.output.snapshot.contains('\\')
-        {
-            return Err(err(
-                "output.snapshot",
-                format!(
-                    "must be a plain file name (no directories), got {:?}",
-                    self.output.snapshot
-                ),
-            ));
-        }
-        Ok(())
-    }
-}
-
 impl Scene {
     /// The protocol as run: each step, with pressure programs unrolled into one `compress`
     /// step per level; paired with the index of the protocol step it comes from.
@@ -1000,9 +626,7 @@ impl Scene {
 
     /// Friction coefficient of a DEM step: its override or `law.mu`.
     pub fn mu_of(&self, step: &Step) -> Mu {
-        step.mu().unwrap_or(match &self.law {
-            Law::HertzMindlin { mu, .. } | Law::Linear { mu, .. } => *mu,
-        })
+        step.mu().unwrap_or(self.law.mu())
     }
 }
 
@@ -1011,6 +635,12 @@ impl Law {
     pub fn kappa(&self) -> f64 {
         match self {
             Law::HertzMindlin { kappa, .. } | Law::Linear { kappa, .. } => *kappa,
+        }
+    }
+    /// The friction coefficient μ.
+    pub fn mu(&self) -> Mu {
+        match self {
+            Law::HertzMindlin { mu, .. } | Law::Linear { mu, .. } => *mu,
         }
     }
     pub fn cohesion(&self) -> Option<Cohesion> {
@@ -1024,114 +654,5 @@ impl Law {
             Law::HertzMindlin { mu, .. } => mu.value() > 0.0,
             Law::Linear { mu, rolling, .. } => mu.value() > 0.0 || rolling.is_some(),
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    const BASE: &str = include_str!("../../reference-inputs/scenes/grc07-cohesive-small.toml");
-
-    fn err(text: &str) -> SceneError {
-        Scene::from_toml(text, Path::new("s.toml")).unwrap_err()
-    }
-
-    #[test]
-    fn valid_scene_parses_with_presets() {
-        let s = Scene::from_toml(BASE, Path::new("s.toml")).unwrap();
-        assert_eq!(s.protocol[0].criteria(), Criteria::grc07());
-        assert!(s.law.cohesion().is_some());
-    }
-
-    #[test]
-    fn errors_name_the_field_and_what_is_allowed() {
-        let e = err(&BASE.replace("zeta = 0.8", "zeta = 1.5"));
-        assert_eq!(e.field, "law.zeta");
-        assert!(e.to_string().contains("s.toml") && e.to_string().contains("[0, 1]"));
-        let e = err(&BASE.replace("d0 = 1e-3", "d0 = 0.3"));
-        assert_eq!(e.field, "law.cohesion.d0");
-        let e = err(&BASE.replace("pressure = 0.01", "pressure = -1"));
-        assert_eq!(e.field, "protocol[0].pressure");
-        let e = err(&BASE.replace("dimension = 2", "dimension = 4"));
-        assert_eq!(e.field, "dimension");
-        let e = err(&BASE.replace("mu = 0.5", "mu = \"lots\""));
-        assert!(e.message.contains("inf"), "{e}");
-        let e = err(&BASE.replace("preset = \"grc07\"", "preset = \"grc09\""));
-        assert!(e.message.contains("grc08"), "{e}");
-        let e = err(&BASE.replace("packing_fraction = 0.36", "packing_fraction = 0.6"));
-        assert_eq!(e.field, "initial.packing_fraction");
-        // Cohesion-scaled criteria need a cohesive law; zero pressure needs cohesion.
-        let no_coh = BASE.replace("cohesion = { d0 = 1e-3 }\n", "");
-        assert_eq!(err(&no_coh).field, "protocol[0].criteria.scale");
-        let e = err(&BASE
-            .replace("pressure = 0.01", "pressure = 0.0")
-            .replace("cohesion = { d0 = 1e-3 }\n", ""));
-        assert_eq!(e.field, "protocol[0].pressure");
-        // Hertz needs spheres.
-        let e = err(&BASE
-            .replace("kind = \"linear\"", "kind = \"hertz-mindlin\"")
-            .replace("kt_over_kn = 1\n", ""));
-        assert!(!e.message.is_empty());
-    }
-
-    #[test]
-    fn procedure_steps_are_checked() {
-        let with = |extra: &str| BASE.to_string() + extra;
-        // Aggregation needs cohesion; factors of programs must exceed 1; LS targets are bounded.
-        let e = err(
-            &with("[[protocol]]\nkind = \"aggregate\"\nmax_time = 10.0\n")
-                .replace("cohesion = { d0 = 1e-3 }\n", "")
-                .replace("preset = \"grc07\"", "preset = \"ar07\"")
-                .replace("pressure = 0.01", "pressure = 1.0"),
-        );
-        assert_eq!(e.field, "protocol[1].kind", "{e}");
-        let e = err(&with("[[protocol]]\nkind = \"pressure-program\"\nfrom = 0.01\nto = 1.0\nfactor = 1.0\ninertia_cap = 0.05\nmax_time = 10.0\n"));
-        assert_eq!(e.field, "protocol[1].factor", "{e}");
-        let e = err(&with(
-            "[[protocol]]\nkind = \"grow\"\npacking_fraction = 0.95\n",
-        ));
-        assert_eq!(e.field, "protocol[1].packing_fraction", "{e}");
-        let e = err(&with("[[protocol]]\nkind = \"expand\"\nfactor = 0.9\n"));
-        assert_eq!(e.field, "protocol[1].factor", "{e}");
-        // FCC needs 4k³ equal spheres.
-        let e = err(&BASE.replace(
-            "packing_fraction = 0.36",
-            "arrangement = \"fcc\"\npacking_fraction = 0.36",
-        ));
-        assert_eq!(e.field, "initial.arrangement", "{e}");
-        // A valid program unrolls into one compress stage per level, ending exactly at `to`.
-        let s = Scene::from_toml(
-            &with("[[protocol]]\nkind = \"pressure-program\"\nfrom = 0.01\nto = 13.33\nfactor = 1.333521432163324\ninertia_cap = 0.05\nmax_time = 10.0\ncriteria = { preset = \"grc08\" }\n"),
-            Path::new("s"),
-        )
-        .unwrap();
-        let stages = s.stages();
-        assert_eq!(stages.len(), 1 + 26);
-        assert!(
-            matches!(stages.last().unwrap().1, Step::Compress { pressure, .. } if pressure == 13.33)
-        );
-        assert!(stages.iter().all(|(k, _)| *k <= 1));
-    }
-
-    #[test]
-    fn unknown_keys_are_refused() {
-        let e = err(&BASE.replace("seed = 1", "seed = 1\nsede = 2"));
-        assert!(e.message.contains("sede"), "{e}");
-        let e = err(&BASE.replace("zeta = 0.8", "zeta = 0.8\nkappa_t = 3"));
-        assert!(e.message.contains("kappa_t"), "{e}");
-    }
-
-    #[test]
-    fn infinite_friction_is_a_keyword() {
-        let s =
-            Scene::from_toml(&BASE.replace("mu = 0.5", "mu = \"inf\""), Path::new("s")).unwrap();
-        assert!(matches!(
-            s.law,
-            Law::Linear {
-                mu: Mu::Infinite,
-                ..
-            }
-        ));
     }
 }

@@ -1,0 +1,176 @@
+//! Checks at each check point: the equilibrium measures, clusters, contacts at a threshold,
+//! blow-up detection.
+
+use super::numerics::StageNumerics;
+use super::output::snapshot_of;
+use super::report::{Checks, RunError};
+use crate::cell::Control;
+use crate::contact::ContactLaw;
+use crate::geometry::{Dim, VectorOps as _};
+use crate::system::{self, System};
+
+/// Number of clusters of `n` grains linked by interactions (contacts or distant attractions).
+pub(super) fn clusters<D: Dim>(n: usize, inter: &[system::Interaction<D>]) -> usize {
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let mut count = n;
+    for c in inter {
+        let (a, b) = (root(&mut parent, c.i), root(&mut parent, c.j));
+        if a != b {
+            parent[a] = b;
+            count -= 1;
+        }
+    }
+    count
+}
+
+/// Consecutive-step correlation of the net forces below which a check counts as flipping.
+pub(super) const FLIP_CORRELATION: f64 = -0.5;
+/// Consecutive flipping checks (outside equilibrium) that stop a run as unstable.
+pub(super) const FLIP_CHECKS: u32 = 5;
+
+/// Correlation Σ a·b / √(Σ|a|² Σ|b|²) of the net forces (or torques) of two consecutive
+/// steps: ≈ cos(ω dt) of the dominant mode, near 1 when the time step resolves the motion,
+/// negative when the dominant mode has fewer than four steps per period (ω dt > π/2), the
+/// signature of a time step past the stability of the leapfrog/velocity-Verlet scheme
+/// (ω dt < 2). 1 when there is no force.
+pub(super) fn step_correlation<V: crate::geometry::VectorOps>(a: &[V], b: &[V]) -> f64 {
+    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        ab += x.dot(y);
+        aa += x.dot(x);
+        bb += y.dot(y);
+    }
+    if aa > 0.0 && bb > 0.0 {
+        ab / (aa * bb).sqrt()
+    } else {
+        1.0
+    }
+}
+
+/// The error for a blown-up run of scene `scene`; `sys` is returned to the last good
+/// checkpoint to write it.
+pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
+    scene: &str,
+    num: &StageNumerics,
+    sys: &mut System<D, L>,
+    last_good: &Option<system::LastGood<D, L>>,
+    what: String,
+) -> RunError {
+    let (_, k_max) = num.time_step(sys);
+    let cause = format!(
+        "{what}. Likely cause: the time step dt = {:.4e} (numerics.dt_fraction = {} of the contact duration for K_max = {:.4e}) is too large for the contacts, or the contacts are too soft (law.kappa) for the applied pressure. Try a smaller numerics.dt_fraction, or a larger numerics.stiffness_force if forces exceed the expected scale",
+        sys.dt, num.dt_fraction, k_max
+    );
+    let (step, time) = (sys.step, sys.time);
+    if let Some(cp) = last_good {
+        sys.restore(cp);
+    }
+    RunError::Unstable {
+        scene: scene.into(),
+        step,
+        time,
+        cause,
+        last_good: Box::new(snapshot_of(
+            sys,
+            scene,
+            num,
+            "unstable",
+            match sys.cell.control {
+                Control::Stress { target, .. } => Some(target[0]),
+                Control::Fixed => None,
+            },
+        )),
+    }
+}
+
+/// Equilibrium measures in units of the criteria of the stage.
+pub fn measure<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, num: &StageNumerics) -> Checks {
+    let f_ref = num.f_ref;
+    let n = sys.len() as f64;
+    let (fmax, tmax) = sys.max_unbalanced();
+    let inter = sys.interactions();
+    // Kinetic energy: all translations, and the rotations of grains that touch another one. A
+    // grain with no contact spinning on itself (a rattler, typically) keeps its spin forever
+    // since no force can reach it; it has no bearing on the equilibrium of the packing, so
+    // its spin is reported apart (`free_spin_per_grain`) instead of blocking the criterion.
+    let mut touching = vec![false; sys.len()];
+    for c in &inter {
+        if c.gap < 0.0 {
+            touching[c.i] = true;
+            touching[c.j] = true;
+        }
+    }
+    let mut ke_t = 0.0;
+    let mut ke_r = 0.0;
+    let mut ke_free = 0.0;
+    for (i, &touch) in touching.iter().enumerate() {
+        ke_t += 0.5 * sys.mass[i] * sys.u[i].norm_squared();
+        if L::MOMENTS {
+            let e = 0.5 * sys.w[i].norm_squared() / sys.inv_inertia[i];
+            if touch {
+                ke_r += e;
+            } else {
+                ke_free += e;
+            }
+        }
+    }
+    let ke = (ke_t + ke_r) / n;
+    let sc = sys.contact_stress();
+    let p = (0..D::D).map(|a| sc[a][a]).sum::<f64>() / D::D as f64;
+    let (target, stress_ratio) = match (num.compress, sys.cell.control) {
+        (true, Control::Stress { target, .. }) => {
+            let dev = (0..D::D)
+                .map(|a| (sc[a][a] - target[a]).abs())
+                .fold(0.0, f64::max);
+            (target[0], dev / (num.stress * f_ref))
+        }
+        _ => (f64::NAN, 0.0),
+    };
+    Checks {
+        packing_fraction: sys.packing_fraction(),
+        pressure: p,
+        pressure_target: target,
+        force_ratio: fmax / (num.force * f_ref),
+        moment_ratio: if L::MOMENTS {
+            tmax / (num.moment * f_ref)
+        } else {
+            0.0
+        },
+        stress_ratio,
+        kinetic_ratio: ke / (num.kinetic * f_ref),
+        kinetic_per_grain: ke,
+        free_spin_per_grain: ke_free / n,
+        interactions: inter.len(),
+        clusters: if num.aggregate {
+            clusters(sys.len(), &inter)
+        } else {
+            0
+        },
+    }
+}
+
+/// Contacts whose tangential force or rolling moment sits at its threshold.
+pub(super) fn contacts_at_threshold<D: Dim, L: ContactLaw<D>>(
+    sys: &System<D, L>,
+    num: &StageNumerics,
+) -> usize {
+    let (mu, mu_r) = (num.mu.value(), num.mu_r);
+    sys.interactions()
+        .iter()
+        .filter(|c| {
+            c.gap < 0.0
+                && ((mu.is_finite()
+                    && mu > 0.0
+                    && c.tangential.norm() >= mu * c.normal_elastic * (1.0 - 1e-9))
+                    || (mu_r.is_finite()
+                        && c.rolling.norm() >= mu_r * c.normal_elastic * (1.0 - 1e-9)))
+        })
+        .count()
+}

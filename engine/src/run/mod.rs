@@ -1,0 +1,259 @@
+//! Running a scene: from the scene file to a typed system (one monomorphized kernel per
+//! combination of dimension and law features), then the protocol steps with the equilibrium
+//! criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), blow-up detection and snapshots.
+//!
+//! [`setup`] builds the grains and the system, [`stages`] runs the protocol, [`checks`]
+//! measures equilibrium and detects blow-ups, [`output`] writes snapshots, [`report`] holds
+//! what a run reports, [`checkpoint`] the resumable state on disk.
+
+pub mod checkpoint;
+pub mod checks;
+pub mod numerics;
+pub mod options;
+pub mod output;
+pub mod report;
+pub mod setup;
+pub mod stages;
+
+pub use crate::contact::from_scene::{adhesion, hertz_mindlin_law, linear_law, rolling_spring};
+pub use checks::measure;
+pub use numerics::StageNumerics;
+pub use options::{CheckpointSpec, RunOptions};
+pub use output::snapshot_of;
+pub use report::{Checks, Outcome, Progress, RunError, StepEnd, StepReport};
+pub use setup::{
+    build_system, cell_mass, initial_grains, system_of, time_step, time_step_for, Grains,
+};
+pub use stages::{compress_until, prepared_grains, run_protocol};
+
+use crate::contact::linear::{CohesionModel, NoCohesion};
+use crate::contact::slider::{Coulomb, Friction, Frictionless, NoRolling, NoSlip};
+use crate::contact::ContactLaw;
+use crate::geometry::{Dim, D2, D3};
+use crate::scene::{Law, Mu, Scene, Step};
+use crate::snapshot::Snapshot;
+use crate::system::System;
+use checkpoint::Header;
+use checks::contacts_at_threshold;
+use stages::{hard_stage, run_stages, write_checkpoint, Ctx, Payload};
+
+/// Runs a validated scene to the end of its protocol (or from a checkpoint to the end).
+///
+/// The run executes on a worker of rayon's global pool, so the parallel loops of each step
+/// fork from a worker (cheap) instead of being injected from outside at every step.
+pub fn run_scene(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunError> {
+    rayon::scope(|_| match scene.dimension {
+        2 => run_dim::<D2>(scene, opts),
+        _ => run_dim::<D3>(scene, opts),
+    })
+}
+
+fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunError> {
+    let resume = opts.resume.take();
+    let mut ctx = Ctx::<D>::new(scene);
+    let mut k = 0;
+    let mut inside: Option<(Header, Vec<u8>)> = None;
+    match resume {
+        Some(cp) => {
+            let h = &cp.header;
+            k = h.stage;
+            ctx.wall_before = h.wall_seconds;
+            ctx.reports = h.reports.clone();
+            ctx.pressure = h.pressure;
+            ctx.neighbor_builds = h.neighbor_builds;
+            if h.inside {
+                inside = Some((cp.header, cp.payload));
+            } else {
+                match checkpoint::decode::<Payload<D, ()>>(&cp.payload)
+                    .map_err(|e| ctx.setup_error(e))?
+                {
+                    Payload::AtStart(g) => ctx.grains = g,
+                    Payload::Inside(_) => {
+                        return Err(
+                            ctx.setup_error("checkpoint payload does not match its header".into())
+                        )
+                    }
+                }
+            }
+        }
+        None => ctx.grains = initial_grains::<D>(scene).map_err(|e| ctx.setup_error(e))?,
+    }
+    let mut snapshot = None;
+    let mut interrupted = false;
+    while k < ctx.stages.len() {
+        let step = ctx.stages[k].1.clone();
+        if !step.is_dem() {
+            if let Some(spec) = &opts.checkpoint {
+                let h = ctx.header(k, false, ctx.grains.time, ctx.grains.step, 0.0);
+                let payload = checkpoint::encode(&Payload::<D, ()>::AtStart(ctx.grains.clone()));
+                write_checkpoint(&ctx, spec, &h, &payload)?;
+            }
+            hard_stage(&mut ctx, k, &step)?;
+            snapshot = None;
+            k += 1;
+            continue;
+        }
+        let mu = scene.mu_of(&step);
+        let mut end = k + 1;
+        while end < ctx.stages.len()
+            && ctx.stages[end].1.is_dem()
+            && scene.mu_of(&ctx.stages[end].1) == mu
+        {
+            end += 1;
+        }
+        let (snap, stopped) = dispatch_law::<D>(&mut ctx, mu, k..end, inside.take(), opts)?;
+        snapshot = Some(snap);
+        if stopped {
+            interrupted = true;
+            break;
+        }
+        k = end;
+    }
+    let snapshot = match snapshot {
+        Some(s) => s,
+        // The protocol ended with hard-grain stages: a snapshot without contacts.
+        None => {
+            let mu = scene.mu_of(&Step::Expand { factor: 1.0 });
+            let n = ctx.stages.len();
+            dispatch_law::<D>(&mut ctx, mu, n..n, None, opts)?.0
+        }
+    };
+    if !interrupted {
+        if let Some(spec) = &opts.checkpoint {
+            // The run is complete: its checkpoint would only resume into a finished run.
+            let _ = std::fs::remove_file(&spec.path);
+        }
+    }
+    Ok(Outcome {
+        snapshot,
+        steps: ctx.reports,
+        dt: ctx.dt,
+        k_max: ctx.k_max,
+        law: ctx.law,
+        wall_seconds: ctx.wall_before + ctx.start.elapsed().as_secs_f64(),
+        neighbor_builds: ctx.neighbor_builds,
+        contacts_at_threshold: ctx.at_threshold,
+    })
+}
+
+fn dispatch_law<D: Dim>(
+    ctx: &mut Ctx<D>,
+    mu: Mu,
+    range: std::ops::Range<usize>,
+    inside: Option<(Header, Vec<u8>)>,
+    opts: &mut RunOptions,
+) -> Result<(Snapshot, bool), RunError> {
+    let law = &ctx.scene.law.clone();
+    match law {
+        Law::HertzMindlin { .. } => match mu {
+            Mu::Finite(0.0) => run_law::<D, _>(
+                ctx,
+                hertz_mindlin_law(law, Frictionless),
+                range,
+                inside,
+                opts,
+            ),
+            Mu::Finite(m) => run_law::<D, _>(
+                ctx,
+                hertz_mindlin_law(law, Coulomb { mu: m }),
+                range,
+                inside,
+                opts,
+            ),
+            Mu::Infinite => {
+                run_law::<D, _>(ctx, hertz_mindlin_law(law, NoSlip), range, inside, opts)
+            }
+        },
+        Law::Linear { cohesion, .. } => match cohesion {
+            Some(c) => linear_friction::<D, _>(ctx, adhesion(c), mu, range, inside, opts),
+            None => linear_friction::<D, _>(ctx, NoCohesion, mu, range, inside, opts),
+        },
+    }
+}
+
+fn linear_friction<D: Dim, C: CohesionModel>(
+    ctx: &mut Ctx<D>,
+    c: C,
+    mu: Mu,
+    range: std::ops::Range<usize>,
+    inside: Option<(Header, Vec<u8>)>,
+    opts: &mut RunOptions,
+) -> Result<(Snapshot, bool), RunError> {
+    match mu {
+        Mu::Finite(0.0) => linear_rolling::<D, C, _>(ctx, c, Frictionless, range, inside, opts),
+        Mu::Finite(m) => linear_rolling::<D, C, _>(ctx, c, Coulomb { mu: m }, range, inside, opts),
+        Mu::Infinite => linear_rolling::<D, C, _>(ctx, c, NoSlip, range, inside, opts),
+    }
+}
+
+fn linear_rolling<D: Dim, C: CohesionModel, F: Friction>(
+    ctx: &mut Ctx<D>,
+    c: C,
+    f: F,
+    range: std::ops::Range<usize>,
+    inside: Option<(Header, Vec<u8>)>,
+    opts: &mut RunOptions,
+) -> Result<(Snapshot, bool), RunError> {
+    let law = &ctx.scene.law.clone();
+    match rolling_spring(law) {
+        Some(r) => run_law::<D, _>(ctx, linear_law(law, c, f, r), range, inside, opts),
+        None => run_law::<D, _>(ctx, linear_law(law, c, f, NoRolling), range, inside, opts),
+    }
+}
+
+/// Runs the DEM stages `range` with one typed law, from the grains in `ctx` or from a
+/// checkpoint taken inside the first of them. Returns the snapshot and whether it stopped.
+fn run_law<D: Dim, L: ContactLaw<D>>(
+    ctx: &mut Ctx<D>,
+    law: L,
+    range: std::ops::Range<usize>,
+    inside: Option<(Header, Vec<u8>)>,
+    opts: &mut RunOptions,
+) -> Result<(Snapshot, bool), RunError> {
+    let scene = ctx.scene;
+    let (mut sys, resume_at) = match inside {
+        Some((h, payload)) => match checkpoint::decode::<Payload<D, L::History>>(&payload)
+            .map_err(|e| ctx.setup_error(e))?
+        {
+            Payload::Inside(st) => (
+                System::from_state(law, st),
+                Some((h.stage_time0, h.stage_steps0, h.stage_wall)),
+            ),
+            Payload::AtStart(_) => {
+                return Err(ctx.setup_error("checkpoint payload does not match its header".into()))
+            }
+        },
+        None => {
+            let mut sys = system_of(scene, law, &ctx.grains).map_err(|e| ctx.setup_error(e))?;
+            sys.init_forces();
+            (sys, None)
+        }
+    };
+    let num = StageNumerics::of_scene(scene);
+    let (dt, k_max) = num.time_step(&sys);
+    debug_assert!(resume_at.is_some() || sys.dt == dt);
+    ctx.dt = sys.dt;
+    ctx.k_max = k_max;
+    ctx.law = sys.law.describe();
+    let builds0 = sys.nlist.builds;
+    let stopped = run_stages(ctx, &mut sys, range, resume_at, opts)?;
+    ctx.neighbor_builds += sys.nlist.builds - builds0;
+    ctx.at_threshold = contacts_at_threshold(&sys, &num);
+    let status = if stopped {
+        "interrupted"
+    } else if ctx.reports.iter().all(|r| r.end.ok()) {
+        "equilibrium"
+    } else {
+        "time-limit"
+    };
+    let snap = snapshot_of(&sys, &scene.name, &num, status, ctx.pressure);
+    ctx.grains = Grains {
+        l: sys.cell.l,
+        s: sys.s.clone(),
+        u: sys.u.clone(),
+        diameter: sys.radius.iter().map(|r| 2.0 * r).collect(),
+        time: sys.time,
+        step: sys.step,
+    };
+    Ok((snap, stopped))
+}

@@ -1,0 +1,27 @@
+//! Options of a run: progress callback, stop flag, checkpoints.
+
+use super::checkpoint::Checkpoint;
+use super::report::Progress;
+use std::sync::atomic::AtomicBool;
+
+/// Periodic checkpoints on disk.
+#[derive(Clone, Debug)]
+pub struct CheckpointSpec {
+    pub path: std::path::PathBuf,
+    /// Wall-clock seconds between checkpoints (one is also written at each stage start that
+    /// runs hard-sphere dynamics, and when the run is stopped).
+    pub every: f64,
+}
+
+/// Options of a run.
+#[derive(Default)]
+pub struct RunOptions<'a> {
+    /// Called at every check (every `numerics.check_every` steps).
+    pub progress: Option<&'a mut (dyn FnMut(&Progress) + Send)>,
+    /// Set to stop the run cleanly at the next check (Ctrl-C).
+    pub stop: Option<&'a AtomicBool>,
+    /// Write checkpoints.
+    pub checkpoint: Option<CheckpointSpec>,
+    /// Continue from a checkpoint of the same scene.
+    pub resume: Option<Checkpoint>,
+}

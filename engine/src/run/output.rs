@@ -1,0 +1,88 @@
+//! The snapshot of a system: what a run writes.
+
+use super::checkpoint;
+use super::numerics::StageNumerics;
+use crate::contact::ContactLaw;
+use crate::geometry::{Dim, VectorOps as _};
+use crate::scene::Mu;
+use crate::snapshot::{self, Snapshot};
+use crate::system::System;
+
+/// The snapshot of the current state.
+pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
+    sys: &System<D, L>,
+    scene: &str,
+    num: &StageNumerics,
+    status: &str,
+    pressure_target: Option<f64>,
+) -> Snapshot {
+    let n = sys.len();
+    let cohesive = num.cohesive;
+    let mu = match num.mu {
+        Mu::Finite(x) => Some(x),
+        Mu::Infinite => None,
+    };
+    let omega = sys.cell.volume();
+    let tensor = |t: &crate::geometry::Tensor| -> Vec<Vec<f64>> {
+        (0..D::D)
+            .map(|a| (0..D::D).map(|b| t[a][b] / omega).collect())
+            .collect()
+    };
+    let contacts = sys
+        .interactions()
+        .into_iter()
+        .map(|c| snapshot::Contact {
+            i: c.i,
+            j: c.j,
+            branch: c.branch.to_vec(),
+            normal: c.normal,
+            normal_elastic: c.normal_elastic,
+            tangential: if L::MOMENTS {
+                c.tangential.to_vec()
+            } else {
+                Vec::new()
+            },
+            rolling: if L::ROLLING {
+                c.rolling.to_vec()
+            } else {
+                Vec::new()
+            },
+            gap: c.gap,
+        })
+        .collect();
+    Snapshot {
+        format: snapshot::FORMAT.into(),
+        version: snapshot::VERSION,
+        code: checkpoint::code(),
+        scene: scene.into(),
+        dimension: D::D,
+        time: sys.time,
+        step: sys.step,
+        status: status.into(),
+        force_unit: if cohesive {
+            "F0".into()
+        } else {
+            format!("P_ref a^{}", D::D - 1)
+        },
+        pressure_target,
+        cohesive,
+        mu,
+        cell: snapshot::Cell {
+            lengths: sys.cell.l.to_vec(),
+            contact_stress: tensor(&sys.contact_virial),
+            kinetic_stress: tensor(&sys.kinetic_virial),
+        },
+        particles: snapshot::Particles {
+            radius: sys.radius.clone(),
+            mass: sys.mass.clone(),
+            position: (0..n).map(|i| sys.position(i).to_vec()).collect(),
+            velocity: sys.u.iter().map(|v| v.to_vec()).collect(),
+            angular_velocity: if L::MOMENTS {
+                sys.w.iter().map(|w| w.to_vec()).collect()
+            } else {
+                Vec::new()
+            },
+        },
+        contacts,
+    }
+}

@@ -1,0 +1,160 @@
+//! What a run reports: progress at each check, how each stage ended, the outcome or why it
+//! stopped early.
+
+use crate::snapshot::Snapshot;
+
+/// What the progress callback sees at each check.
+#[derive(Clone, Debug, Default)]
+pub struct Progress {
+    /// Protocol step (0-based) and count.
+    pub step_index: usize,
+    pub step_count: usize,
+    pub step_kind: &'static str,
+    /// Time since the start of the protocol step, and its limit.
+    pub time: f64,
+    pub max_time: f64,
+    pub steps: u64,
+    pub checks: Checks,
+}
+
+/// Equilibrium measures at one check, in units of the criteria.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct Checks {
+    pub packing_fraction: f64,
+    /// Mean contact pressure trace(σ_contact)/d.
+    pub pressure: f64,
+    /// Target pressure (NaN in a fixed cell).
+    pub pressure_target: f64,
+    /// Largest net force on a grain / (criterion · F_ref).
+    pub force_ratio: f64,
+    /// Largest net moment / (criterion · F_ref · a) (0 when the law has no moments).
+    pub moment_ratio: f64,
+    /// Largest |σ_αα − Σ_α| / (criterion · F_ref/a^(d−1)) (0 in a fixed cell).
+    pub stress_ratio: f64,
+    /// Kinetic energy per grain / (criterion · F_ref · a).
+    pub kinetic_ratio: f64,
+    /// Kinetic energy per grain, reduced units (translation, and rotation of touching grains).
+    pub kinetic_per_grain: f64,
+    /// Rotational energy per grain of grains without any contact, not counted above.
+    pub free_spin_per_grain: f64,
+    /// Interacting pairs.
+    pub interactions: usize,
+    /// Clusters of interacting grains (`aggregate` stages only, else 0).
+    pub clusters: usize,
+}
+
+impl Checks {
+    /// All criteria met.
+    pub fn equilibrium(&self) -> bool {
+        self.force_ratio < 1.0
+            && self.moment_ratio < 1.0
+            && self.stress_ratio < 1.0
+            && self.kinetic_ratio < 1.0
+    }
+}
+
+/// How a protocol step ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StepEnd {
+    /// The equilibrium criteria hold.
+    Equilibrium,
+    /// `aggregate`: all grains form one cluster.
+    OneCluster,
+    /// A hard-grain stage (expansion, mixing, growth) completed.
+    Done,
+    TimeLimit,
+    Interrupted,
+}
+
+impl StepEnd {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StepEnd::Equilibrium => "equilibrium",
+            StepEnd::OneCluster => "one-cluster",
+            StepEnd::Done => "done",
+            StepEnd::TimeLimit => "time-limit",
+            StepEnd::Interrupted => "interrupted",
+        }
+    }
+    /// Did the stage reach what it was run for?
+    pub fn ok(self) -> bool {
+        matches!(
+            self,
+            StepEnd::Equilibrium | StepEnd::OneCluster | StepEnd::Done
+        )
+    }
+}
+
+/// Report of one protocol stage.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct StepReport {
+    /// Stage index in [`Scene::stages`](crate::scene::Scene::stages).
+    pub index: usize,
+    pub kind: String,
+    pub end: StepEnd,
+    /// Time spent in the stage (hard-grain stages: their own event-driven time).
+    pub time: f64,
+    /// Time steps (hard-grain stages: pair collisions).
+    pub steps: u64,
+    pub wall_seconds: f64,
+    pub checks: Checks,
+}
+
+/// Result of a whole run.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    pub snapshot: Snapshot,
+    pub steps: Vec<StepReport>,
+    /// Time step and the stiffness it was derived from.
+    pub dt: f64,
+    pub k_max: f64,
+    pub law: String,
+    pub wall_seconds: f64,
+    pub neighbor_builds: u64,
+    /// Contacts at the Coulomb or rolling threshold at the end (should be 0 at equilibrium:
+    /// GRC07 §II.D, the thresholds hold as strict inequalities).
+    pub contacts_at_threshold: usize,
+}
+
+impl Outcome {
+    /// Did every step end at equilibrium?
+    pub fn equilibrated(&self) -> bool {
+        self.steps.iter().all(|s| s.end.ok())
+    }
+}
+
+/// Why a run stopped early.
+#[derive(Debug)]
+pub enum RunError {
+    /// The scene cannot start (placement, cell too small).
+    Setup { scene: String, message: String },
+    /// The integration blew up; `last_good` is the last state that passed the checks.
+    Unstable {
+        scene: String,
+        step: u64,
+        time: f64,
+        cause: String,
+        last_good: Box<Snapshot>,
+    },
+}
+
+impl std::fmt::Display for RunError {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            RunError::Setup { scene, message } => write!(f, "scene {scene}: {message}"),
+            RunError::Unstable {
+                scene,
+                step,
+                time,
+                cause,
+                ..
+            } => write!(
+                f,
+                "scene {scene}: unstable at step {step} (t = {time:.6e}): {cause}"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for RunError {}

@@ -1,0 +1,184 @@
+//! From a scene to a system: the initial grains, the cell mass, the time step.
+
+use super::numerics::StageNumerics;
+use crate::cell::Cell;
+use crate::contact::from_scene::{hertz_mindlin_law, linear_law};
+use crate::contact::hertz_mindlin::HertzMindlin;
+use crate::contact::linear::{Linear, NoCohesion};
+use crate::contact::slider::{Frictionless, NoRolling};
+use crate::contact::ContactLaw;
+use crate::geometry::{Dim, VectorOps as _};
+use crate::init::{maxwell_velocities, random_gas};
+use crate::protocols::lattice;
+use crate::scene::{Arrangement, Law, Scene};
+use crate::snapshot::Snapshot;
+use crate::system::System;
+
+/// Grains between protocol stages, independent of the contact law: what hard-sphere stages
+/// read and write, and what a new contact law starts from.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(bound = "")]
+pub struct Grains<D: Dim> {
+    pub l: D::V,
+    pub s: Vec<D::V>,
+    pub u: Vec<D::V>,
+    pub diameter: Vec<f64>,
+    pub time: f64,
+    pub step: u64,
+}
+
+/// The initial grains of a scene: random gas (GRC07 §III.A) or FCC lattice (AR07 §III).
+pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
+    let n = scene.particles.count;
+    if let Some(path) = &scene.initial.snapshot {
+        return snapshot_grains(path, n);
+    }
+    let (l, s, diameter) = match scene.initial.arrangement {
+        Arrangement::Random => {
+            let gas = random_gas::<D>(
+                n,
+                scene.particles.min_diameter,
+                scene.initial.packing_fraction,
+                scene.seed,
+            )?;
+            (gas.l, gas.s, gas.diameter)
+        }
+        Arrangement::Fcc => {
+            let k = lattice::fcc_cells_for(n).ok_or("FCC needs 4k³ grains")?;
+            let (side, pos) = lattice::fcc(k, scene.initial.packing_fraction);
+            let mut l = D::V::zero();
+            for a in 0..D::D {
+                l[a] = side;
+            }
+            let s = pos.iter().map(|p| D::from_slice(p.as_slice())).collect();
+            (l, s, vec![1.0; n])
+        }
+    };
+    let mass: Vec<f64> = diameter.iter().map(|d| d.powi(D::D as i32)).collect();
+    let u = if scene.initial.rms_velocity > 0.0 {
+        maxwell_velocities::<D>(&mass, scene.initial.rms_velocity, scene.seed)
+    } else {
+        vec![D::V::zero(); n]
+    };
+    Ok(Grains {
+        l,
+        s,
+        u,
+        diameter,
+        time: 0.0,
+        step: 0,
+    })
+}
+
+/// The grains of a snapshot file, at rest (`initial.snapshot`).
+fn snapshot_grains<D: Dim>(path: &std::path::Path, n: usize) -> Result<Grains<D>, String> {
+    let snap = Snapshot::read(path).map_err(|e| format!("initial.snapshot: {e}"))?;
+    let p = &snap.particles;
+    if snap.dimension != D::D || p.radius.len() != n {
+        return Err(format!(
+            "initial.snapshot {}: holds {} grains in {}D, the scene wants {n} in {}D (particles.count, dimension)",
+            path.display(),
+            p.radius.len(),
+            snap.dimension,
+            D::D
+        ));
+    }
+    let mut l = D::V::zero();
+    for a in 0..D::D {
+        l[a] = snap.cell.lengths[a];
+    }
+    let s = p
+        .position
+        .iter()
+        .map(|r| {
+            let mut x = D::V::zero();
+            for a in 0..D::D {
+                x[a] = (r[a] / l[a]).rem_euclid(1.0);
+            }
+            x
+        })
+        .collect();
+    Ok(Grains {
+        l,
+        s,
+        u: vec![D::V::zero(); n],
+        diameter: p.radius.iter().map(|r| 2.0 * r).collect(),
+        time: 0.0,
+        step: 0,
+    })
+}
+
+/// Generalized mass of the cell, AR07 (7): `numerics.cell_mass` × the total grain mass,
+/// divided by the cell's linear size when `cell_mass_per_length` (GRC07 §II.A).
+pub fn cell_mass(numerics: &crate::scene::Numerics, total_mass: f64, volume: f64, d: usize) -> f64 {
+    let m = numerics.cell_mass * total_mass;
+    if numerics.cell_mass_per_length {
+        m / volume.powf(1.0 / d as f64)
+    } else {
+        m
+    }
+}
+
+/// The system of a scene's initial grains for a law (as the first stage of a scene that starts
+/// with a DEM stage sees it).
+pub fn build_system<D: Dim, L: ContactLaw<D>>(
+    scene: &Scene,
+    law: L,
+) -> Result<System<D, L>, String> {
+    system_of(scene, law, &initial_grains::<D>(scene)?)
+}
+
+/// A system holding `grains`, with the law, cell mass and time step of the scene.
+pub fn system_of<D: Dim, L: ContactLaw<D>>(
+    scene: &Scene,
+    law: L,
+    grains: &Grains<D>,
+) -> Result<System<D, L>, String> {
+    let total_mass: f64 = grains.diameter.iter().map(|d| d.powi(D::D as i32)).sum();
+    let cell_mass = cell_mass(&scene.numerics, total_mass, D::product(grains.l), D::D);
+    let cell = Cell::new(grains.l, cell_mass);
+    let mut sys = System::new(
+        law,
+        cell,
+        grains.s.clone(),
+        &grains.diameter,
+        scene.numerics.skin,
+    );
+    sys.u.clone_from(&grains.u);
+    sys.time = grains.time;
+    sys.step = grains.step;
+    let (dt, _) = StageNumerics::of_scene(scene).time_step(&sys);
+    sys.dt = dt;
+    sys.check_cell()?;
+    Ok(sys)
+}
+
+/// The time step of `sys` with the numerics of `scene` ([`StageNumerics::time_step`]).
+/// Returns (dt, K_max).
+pub fn time_step<D: Dim, L: ContactLaw<D>>(scene: &Scene, sys: &System<D, L>) -> (f64, f64) {
+    StageNumerics::of_scene(scene).time_step(sys)
+}
+
+/// The time step our engine uses for `grains` at stiffness `kappa` (the scene's law with κ
+/// replaced): `dt_fraction` of the binary contact duration with the stiffest contact.
+pub fn time_step_for<D: Dim>(scene: &Scene, grains: &Grains<D>, kappa: f64) -> Result<f64, String> {
+    let factor = kappa / scene.law.kappa();
+    let dt = match &scene.law {
+        Law::HertzMindlin { .. } => {
+            let law = <HertzMindlin<Frictionless> as ContactLaw<D>>::with_kappa_scaled(
+                &hertz_mindlin_law(&scene.law, Frictionless),
+                factor,
+            );
+            time_step::<D, _>(scene, &system_of(scene, law, grains)?).0
+        }
+        Law::Linear { .. } => {
+            let law =
+                <Linear<NoCohesion, Frictionless, NoRolling> as ContactLaw<D>>::with_kappa_scaled(
+                    &linear_law(&scene.law, NoCohesion, Frictionless, NoRolling),
+                    factor,
+                );
+            time_step::<D, _>(scene, &system_of(scene, law, grains)?).0
+        }
+    };
+    Ok(dt)
+}

@@ -1,0 +1,462 @@
+//! The stage loop: DEM stages run to their criteria with checks, progress and checkpoints;
+//! hard-grain stages (expansion, event-driven mixing, growth).
+
+use super::checkpoint::{self, Checkpoint, Header};
+use super::checks::{contacts_at_threshold, measure, step_correlation, unstable};
+use super::checks::{FLIP_CHECKS, FLIP_CORRELATION};
+use super::numerics::StageNumerics;
+use super::options::{CheckpointSpec, RunOptions};
+use super::output::snapshot_of;
+use super::report::{Checks, Progress, RunError, StepEnd, StepReport};
+use super::setup::{build_system, initial_grains, Grains};
+use crate::cell::Control;
+use crate::contact::ContactLaw;
+use crate::geometry::{Dim, VectorOps as _};
+use crate::init::maxwell_velocities;
+use crate::protocols::event_driven::HardSpheres;
+use crate::scene::{Scene, Step};
+use crate::snapshot::Snapshot;
+use crate::system::{State, System};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// Checkpoint payload: grains at a stage start, or the integrator inside a stage.
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(bound(
+    serialize = "H: serde::Serialize",
+    deserialize = "H: serde::de::DeserializeOwned"
+))]
+#[allow(clippy::large_enum_variant)] // one per checkpoint write, short-lived
+pub(super) enum Payload<D: Dim, H> {
+    AtStart(Grains<D>),
+    Inside(State<D, H>),
+}
+
+/// Bookkeeping carried through the stages.
+pub(super) struct Ctx<'s, D: Dim> {
+    pub(super) scene: &'s Scene,
+    pub(super) stages: Vec<(usize, Step)>,
+    pub(super) start: Instant,
+    pub(super) wall_before: f64,
+    pub(super) reports: Vec<StepReport>,
+    pub(super) pressure: Option<f64>,
+    pub(super) grains: Grains<D>,
+    pub(super) neighbor_builds: u64,
+    pub(super) last_checkpoint: Instant,
+    pub(super) dt: f64,
+    pub(super) k_max: f64,
+    pub(super) law: String,
+    pub(super) at_threshold: usize,
+}
+
+impl<'s, D: Dim> Ctx<'s, D> {
+    /// A run of `scene` starting now, with no grains yet.
+    pub(super) fn new(scene: &'s Scene) -> Self {
+        Ctx {
+            scene,
+            stages: scene.stages(),
+            start: Instant::now(),
+            wall_before: 0.0,
+            reports: Vec::new(),
+            pressure: None,
+            grains: Grains {
+                l: D::V::zero(),
+                s: Vec::new(),
+                u: Vec::new(),
+                diameter: Vec::new(),
+                time: 0.0,
+                step: 0,
+            },
+            neighbor_builds: 0,
+            last_checkpoint: Instant::now(),
+            dt: 0.0,
+            k_max: 0.0,
+            law: String::new(),
+            at_threshold: 0,
+        }
+    }
+
+    pub(super) fn header(
+        &self,
+        stage: usize,
+        inside: bool,
+        t0: f64,
+        steps0: u64,
+        stage_wall: f64,
+    ) -> Header {
+        Header {
+            format: checkpoint::FORMAT.into(),
+            version: checkpoint::VERSION,
+            code: checkpoint::code(),
+            scene_json: serde_json::to_string(self.scene).expect("scene encodes"),
+            stage,
+            inside,
+            stage_time0: t0,
+            stage_steps0: steps0,
+            stage_wall,
+            wall_seconds: self.wall_before + self.start.elapsed().as_secs_f64(),
+            reports: self.reports.clone(),
+            pressure: self.pressure,
+            neighbor_builds: self.neighbor_builds,
+        }
+    }
+
+    pub(super) fn setup_error(&self, message: String) -> RunError {
+        RunError::Setup {
+            scene: self.scene.name.clone(),
+            message,
+        }
+    }
+}
+
+pub(super) fn write_checkpoint<D: Dim>(
+    ctx: &Ctx<D>,
+    spec: &CheckpointSpec,
+    header: &Header,
+    payload: &[u8],
+) -> Result<(), RunError> {
+    Checkpoint::write(&spec.path, header, payload).map_err(|e| {
+        ctx.setup_error(format!(
+            "cannot write the checkpoint {}: {e}",
+            spec.path.display()
+        ))
+    })
+}
+
+/// A deterministic seed for stage `k` of a scene.
+fn stage_seed(seed: u64, k: usize) -> u64 {
+    seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(k as u64 + 1))
+}
+
+/// Hard-grain stages: expansion, event-driven mixing, Lubachevsky–Stillinger growth.
+pub(super) fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize, step: &Step) -> Result<(), RunError> {
+    let t = Instant::now();
+    let scene_name = ctx.scene.name.clone();
+    let setup = |message: String| RunError::Setup {
+        scene: scene_name.clone(),
+        message,
+    };
+    let g = &mut ctx.grains;
+    let n = g.s.len();
+    let mass: Vec<f64> = g.diameter.iter().map(|d| d.powi(D::D as i32)).collect();
+    let radius: Vec<f64> = g.diameter.iter().map(|d| 0.5 * d).collect();
+    let hard = |g: &Grains<D>| {
+        let vel = maxwell_velocities::<D>(&mass, 1.0, stage_seed(ctx.scene.seed, k));
+        HardSpheres::<D>::new(g.l, g.s.clone(), radius.clone(), mass.clone(), vel).map_err(|e| {
+            format!("{} stage {}: {e}. Grains must not overlap before hard-sphere dynamics: add an `expand` step first (AR07 §IV.B uses factor = 1.005)", step.kind(), k + 1)
+        })
+    };
+    let (time, collisions) = match step {
+        Step::Expand { factor } => {
+            g.l = g.l * *factor;
+            (0.0, 0)
+        }
+        Step::HardSphereMix {
+            collisions_per_grain,
+        } => {
+            let mut hs = hard(g).map_err(setup)?;
+            let st = hs.run_collisions(*collisions_per_grain);
+            g.s = hs.s;
+            (st.time, st.collisions)
+        }
+        Step::Grow {
+            packing_fraction,
+            rate,
+        } => {
+            let mut hs = hard(g).map_err(setup)?;
+            let st = hs
+                .grow(*packing_fraction, *rate)
+                .map_err(|e| setup(format!("grow stage {}: {e}", k + 1)))?;
+            // Back to the length unit a: the grains keep their diameters, the cell shrinks.
+            let factor = hs.radius[0] / radius[0];
+            g.l = hs.l * (1.0 / factor);
+            g.s = hs.s;
+            (st.time, st.collisions)
+        }
+        _ => unreachable!("DEM stage in hard_stage"),
+    };
+    g.u = vec![D::V::zero(); n];
+    let phi: f64 = g.diameter.iter().map(|d| D::grain_volume(*d)).sum::<f64>() / D::product(g.l);
+    ctx.reports.push(StepReport {
+        index: k,
+        kind: step.kind().into(),
+        end: StepEnd::Done,
+        time,
+        steps: collisions,
+        wall_seconds: t.elapsed().as_secs_f64(),
+        checks: Checks {
+            packing_fraction: phi,
+            pressure_target: f64::NAN,
+            ..Default::default()
+        },
+    });
+    Ok(())
+}
+
+/// A system of `scene` with `law`, run through its protocol until the packing fraction
+/// reaches `phi_stop` at a check (or the protocol ends): the fast-compressed dense packings of
+/// the step benchmarks and `grainbench bench --scale`.
+pub fn compress_until<D: Dim, L: ContactLaw<D>>(
+    scene: &Scene,
+    law: L,
+    phi_stop: f64,
+) -> Result<System<D, L>, RunError> {
+    let mut sys = build_system::<D, L>(scene, law).map_err(|message| RunError::Setup {
+        scene: scene.name.clone(),
+        message,
+    })?;
+    let stop = AtomicBool::new(false);
+    let mut progress = |p: &Progress| {
+        if p.checks.packing_fraction >= phi_stop {
+            stop.store(true, Ordering::Relaxed);
+        }
+    };
+    let mut opts = RunOptions {
+        progress: Some(&mut progress),
+        stop: Some(&stop),
+        ..Default::default()
+    };
+    // On a pool worker, as `run_scene` does.
+    rayon::scope(|_| run_protocol(scene, &mut sys, &mut opts))?;
+    Ok(sys)
+}
+
+/// Runs every DEM stage of `scene` on a prepared system (all with the system's law): the
+/// benches' preparation route.
+pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
+    scene: &Scene,
+    sys: &mut System<D, L>,
+    opts: &mut RunOptions,
+) -> Result<(Vec<StepReport>, Snapshot, usize), RunError> {
+    sys.init_forces();
+    let mut ctx = Ctx::<D>::new(scene);
+    let n = ctx.stages.len();
+    let stopped = run_stages(&mut ctx, sys, 0..n, None, opts)?;
+    let status = if stopped {
+        "interrupted"
+    } else {
+        "equilibrium"
+    };
+    let num = StageNumerics::of_scene(scene);
+    let snap = snapshot_of(sys, &scene.name, &num, status, ctx.pressure);
+    Ok((ctx.reports, snap, contacts_at_threshold(sys, &num)))
+}
+
+/// The stages `range` on one system; returns whether the run was stopped.
+pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
+    ctx: &mut Ctx<D>,
+    sys: &mut System<D, L>,
+    range: std::ops::Range<usize>,
+    mut resume_at: Option<(f64, u64, f64)>,
+    opts: &mut RunOptions,
+) -> Result<bool, RunError> {
+    let scene = ctx.scene;
+    let base_law = sys.law;
+    let n = sys.len() as f64;
+    let ke0 = sys.kinetic_energy() / n;
+    let mut last_good = None;
+    sys.save(&mut last_good);
+    let stage_count = ctx.stages.len();
+    for k in range {
+        let step = ctx.stages[k].1.clone();
+        let kind = step.kind();
+        let num = StageNumerics::of_stage(scene, &step, ctx.pressure);
+        // κ of the stage; the time step follows.
+        sys.law = base_law.with_kappa_scaled(num.kappa_factor);
+        let (dt, k_max) = num.time_step(sys);
+        sys.dt = dt;
+        ctx.dt = dt;
+        ctx.k_max = k_max;
+        match &step {
+            Step::Compress {
+                pressure: p,
+                inertia_cap,
+                ..
+            } => {
+                ctx.pressure = Some(*p);
+                // Strain-rate cap: AR07 (23) I = ε̇√(m/(aP)) (time unit √(m/(aP)) for P > 0
+                // without cohesion), GRC08 I_a = ε̇ T0 with T0 = √(m a/F0) = 1 with cohesion.
+                let time_unit = if num.cohesive { 1.0 } else { 1.0 / p.sqrt() };
+                let mut target = D::V::zero();
+                for a in 0..D::D {
+                    target[a] = *p;
+                }
+                sys.cell.control = Control::Stress {
+                    target,
+                    rate_cap: inertia_cap / time_unit,
+                };
+            }
+            _ => {
+                sys.cell.control = Control::Fixed;
+                sys.cell.ldot = D::V::zero();
+            }
+        }
+        let (full_time, aggregate, max_time) = (num.full_time, num.aggregate, num.max_time);
+        let (t0, steps0, wall0) = resume_at.take().unwrap_or((sys.time, sys.step, 0.0));
+        let step_start = Instant::now();
+        let end;
+        let mut checks;
+        let mut prev_force: Vec<D::V> = Vec::new();
+        let mut prev_torque: Vec<D::Ang> = Vec::new();
+        let mut flips = 0u32;
+        loop {
+            for m in 0..num.check_every {
+                if m + 1 == num.check_every {
+                    prev_force.clear();
+                    prev_force.extend_from_slice(&sys.force);
+                    prev_torque.clear();
+                    prev_torque.extend_from_slice(&sys.torque);
+                }
+                sys.step();
+                let (ov, i, j) = sys.max_overlap;
+                if ov.is_nan() || ov > num.max_overlap {
+                    return Err(unstable(
+                        &scene.name,
+                        &num,
+                        sys,
+                        &last_good,
+                        if ov.is_nan() {
+                            "non-finite positions or forces".to_string()
+                        } else {
+                            format!(
+                                "overlap of {ov:.3} times the smaller radius between grains {i} and {j} (limit numerics.max_overlap = {})",
+                                num.max_overlap
+                            )
+                        },
+                    ));
+                }
+            }
+            checks = measure(sys, &num);
+            if let Some(cb) = opts.progress.as_mut() {
+                cb(&Progress {
+                    step_index: k,
+                    step_count: stage_count,
+                    step_kind: kind,
+                    time: sys.time - t0,
+                    max_time,
+                    steps: sys.step - steps0,
+                    checks: checks.clone(),
+                });
+            }
+            // Time step past stability: the fastest modes flip sign at every step (the
+            // integrator's amplification is real and negative) and, held by the nonlinear
+            // contacts, oscillate for ever instead of blowing up: a packing that never
+            // equilibrates, denser than it should be.
+            let flip = step_correlation(&prev_force, &sys.force)
+                .min(step_correlation(&prev_torque, &sys.torque));
+            flips = if flip < FLIP_CORRELATION && !checks.equilibrium() {
+                flips + 1
+            } else {
+                0
+            };
+            if flips >= FLIP_CHECKS {
+                return Err(unstable(
+                    &scene.name,
+                    &num,
+                    sys,
+                    &last_good,
+                    format!(
+                        "the net forces on the grains reverse at every time step (correlation of consecutive steps {flip:.2} at {flips} consecutive checks, force/criterion = {:.2e}): the fastest contact vibration has fewer than four time steps per period, the integration no longer follows the dynamics and the packing would be wrong",
+                        checks.force_ratio
+                    ),
+                ));
+            }
+            let finite = checks.kinetic_per_grain.is_finite()
+                && checks.force_ratio.is_finite()
+                && checks.pressure.is_finite()
+                && sys.cell.l.is_finite();
+            if !finite {
+                return Err(unstable(
+                    &scene.name,
+                    &num,
+                    sys,
+                    &last_good,
+                    "non-finite velocities, forces or cell lengths".into(),
+                ));
+            }
+            if checks.kinetic_per_grain > 1e4 * (num.f_ref + ke0) {
+                return Err(unstable(
+                    &scene.name,
+                    &num,
+                    sys,
+                    &last_good,
+                    format!(
+                        "kinetic energy per grain exploded to {:.3e} (force unit × a)",
+                        checks.kinetic_per_grain
+                    ),
+                ));
+            }
+            sys.save(&mut last_good);
+            if aggregate && checks.clusters == 1 {
+                end = StepEnd::OneCluster;
+                break;
+            }
+            if !aggregate && !full_time && checks.equilibrium() {
+                end = StepEnd::Equilibrium;
+                break;
+            }
+            if sys.time - t0 >= max_time {
+                end = StepEnd::TimeLimit;
+                break;
+            }
+            if opts.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+                end = StepEnd::Interrupted;
+                break;
+            }
+            if let Some(spec) = &opts.checkpoint {
+                if ctx.last_checkpoint.elapsed().as_secs_f64() >= spec.every {
+                    let wall = wall0 + step_start.elapsed().as_secs_f64();
+                    let h = ctx.header(k, true, t0, steps0, wall);
+                    let payload =
+                        checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
+                    write_checkpoint(ctx, spec, &h, &payload)?;
+                    ctx.last_checkpoint = Instant::now();
+                }
+            }
+        }
+        // A full-time run that also meets the criteria at its end counts as equilibrated.
+        let end = if full_time && end == StepEnd::TimeLimit && checks.equilibrium() {
+            StepEnd::Equilibrium
+        } else {
+            end
+        };
+        let wall = wall0 + step_start.elapsed().as_secs_f64();
+        if end == StepEnd::Interrupted {
+            // Resumable from exactly here.
+            if let Some(spec) = &opts.checkpoint {
+                let h = ctx.header(k, true, t0, steps0, wall);
+                let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
+                write_checkpoint(ctx, spec, &h, &payload)?;
+            }
+        }
+        ctx.reports.push(StepReport {
+            index: k,
+            kind: kind.into(),
+            end,
+            time: sys.time - t0,
+            steps: sys.step - steps0,
+            wall_seconds: wall,
+            checks,
+        });
+        if end == StepEnd::Interrupted {
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
+/// The common start of a cross-code comparison: the scene's initial grains with its leading
+/// hard-grain stages (melting, growth, expansion) applied, and the index of the first DEM
+/// stage. External codes have no event-driven dynamics, so their decks start here, from the
+/// very configuration our DEM stages start from.
+pub fn prepared_grains<D: Dim>(scene: &Scene) -> Result<(Grains<D>, usize), String> {
+    let mut ctx = Ctx::<D>::new(scene);
+    ctx.grains = initial_grains::<D>(scene)?;
+    let mut k = 0;
+    while k < ctx.stages.len() && !ctx.stages[k].1.is_dem() {
+        let step = ctx.stages[k].1.clone();
+        hard_stage(&mut ctx, k, &step).map_err(|e| e.to_string())?;
+        k += 1;
+    }
+    Ok((ctx.grains, k))
+}
