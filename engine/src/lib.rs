@@ -16,6 +16,7 @@ pub mod init;
 pub mod library;
 pub mod neighbor;
 pub mod protocols;
+pub mod relax;
 pub mod run;
 pub mod scene;
 pub mod snapshot;

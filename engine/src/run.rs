@@ -12,6 +12,7 @@ use crate::geometry::{Dim, Linear as _, D2, D3};
 use crate::init::{maxwell_velocities, random_gas};
 use crate::protocols::event_driven::HardSpheres;
 use crate::protocols::lattice;
+use crate::relax::{Relaxation, StageWatch};
 use crate::scene::{Arrangement, Criteria, ForceScale, Law, Mu, Scene, Step};
 use crate::snapshot::{self, Snapshot};
 use crate::system::{self as system, State, System};
@@ -52,6 +53,9 @@ pub struct Checks {
     pub kinetic_per_grain: f64,
     /// Rotational energy per grain of grains without any contact, not counted above.
     pub free_spin_per_grain: f64,
+    /// Largest strain rate max_α |L̇_α/L_α| (1/time unit; 0 in a fixed cell).
+    #[serde(default)]
+    pub strain_rate: f64,
     /// Interacting pairs.
     pub interactions: usize,
     /// Clusters of interacting grains (`aggregate` stages only, else 0).
@@ -114,6 +118,12 @@ pub struct StepReport {
     pub steps: u64,
     pub wall_seconds: f64,
     pub checks: Checks,
+    /// Largest strain rate |L̇_α/L_α| seen at a check of the stage (1/time unit).
+    #[serde(default)]
+    pub peak_strain_rate: f64,
+    /// What the damped final phase changed, for a stage with `relax` that reached it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relaxation: Option<Relaxation>,
 }
 
 /// Result of a whole run.
@@ -218,7 +228,8 @@ pub struct Grains<D: Dim> {
 #[allow(clippy::large_enum_variant)] // one per checkpoint write, short-lived
 enum Payload<D: Dim, H> {
     AtStart(Grains<D>),
-    Inside(State<D, H>),
+    /// The integrator state and the stage's progress towards its end.
+    Inside(State<D, H>, StageWatch<D>),
 }
 
 /// Bookkeeping carried through the stages.
@@ -403,7 +414,7 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
                     .map_err(|e| ctx.setup_error(e))?
                 {
                     Payload::AtStart(g) => ctx.grains = g,
-                    Payload::Inside(_) => {
+                    Payload::Inside(..) => {
                         return Err(
                             ctx.setup_error("checkpoint payload does not match its header".into())
                         )
@@ -551,6 +562,8 @@ fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize, step: &Step) -> Result<(), Run
             pressure_target: f64::NAN,
             ..Default::default()
         },
+        peak_strain_rate: 0.0,
+        relaxation: None,
     });
     Ok(())
 }
@@ -763,9 +776,9 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
         Some((h, payload)) => match checkpoint::decode::<Payload<D, L::History>>(&payload)
             .map_err(|e| ctx.setup_error(e))?
         {
-            Payload::Inside(st) => (
+            Payload::Inside(st, watch) => (
                 System::from_state(law, st),
-                Some((h.stage_time0, h.stage_steps0, h.stage_wall)),
+                Some((h.stage_time0, h.stage_steps0, h.stage_wall, watch)),
             ),
             Payload::AtStart(_) => {
                 return Err(ctx.setup_error("checkpoint payload does not match its header".into()))
@@ -879,7 +892,7 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
     ctx: &mut Ctx<D>,
     sys: &mut System<D, L>,
     range: std::ops::Range<usize>,
-    mut resume_at: Option<(f64, u64, f64)>,
+    mut resume_at: Option<(f64, u64, f64, StageWatch<D>)>,
     opts: &mut RunOptions,
 ) -> Result<bool, RunError> {
     let scene = ctx.scene;
@@ -938,7 +951,13 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
             }
         );
         let aggregate = matches!(step, Step::Aggregate { .. });
-        let (t0, steps0, wall0) = resume_at.take().unwrap_or((sys.time, sys.step, 0.0));
+        let (t0, steps0, wall0, mut watch) = match resume_at.take() {
+            Some(r) => r,
+            None => (sys.time, sys.step, 0.0, StageWatch::new(step.relax(), sys.time)),
+        };
+        if let Some(z) = watch.tangential_zeta() {
+            sys.law = sys.law.with_tangential_damping(z);
+        }
         let step_start = Instant::now();
         let max_time = step.max_time();
         let end;
@@ -947,6 +966,7 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
         let mut prev_torque: Vec<D::Ang> = Vec::new();
         let mut flips = 0u32;
         loop {
+            let damping = watch.damping_factor(sys.dt);
             for m in 0..scene.numerics.check_every {
                 if m + 1 == scene.numerics.check_every {
                     prev_force.clear();
@@ -955,6 +975,9 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
                     prev_torque.extend_from_slice(&sys.torque);
                 }
                 sys.step();
+                if let Some(f) = damping {
+                    sys.damp(f);
+                }
                 let (ov, i, j) = sys.max_overlap;
                 if ov.is_nan() || ov > scene.numerics.max_overlap {
                     return Err(unstable(
@@ -1030,11 +1053,26 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
                 ));
             }
             sys.save(&mut last_good);
+            if watch.watching()
+                && watch.observe_structure(
+                    sys.time,
+                    &mut pair_list(sys),
+                    checks.kinetic_ratio < 1.0,
+                    checks.packing_fraction,
+                    &sys.s,
+                )
+            {
+                if let Some(z) = watch.tangential_zeta() {
+                    sys.law = sys.law.with_tangential_damping(z);
+                }
+            }
+            watch.peak_strain_rate = watch.peak_strain_rate.max(checks.strain_rate);
+            let held = watch.held(sys.time, checks.equilibrium(), criteria.window);
             if aggregate && checks.clusters == 1 {
                 end = StepEnd::OneCluster;
                 break;
             }
-            if !aggregate && !full_time && checks.equilibrium() {
+            if !aggregate && !full_time && held {
                 end = StepEnd::Equilibrium;
                 break;
             }
@@ -1050,8 +1088,10 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
                 if ctx.last_checkpoint.elapsed().as_secs_f64() >= spec.every {
                     let wall = wall0 + step_start.elapsed().as_secs_f64();
                     let h = ctx.header(k, true, t0, steps0, wall);
-                    let payload =
-                        checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
+                    let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(
+                        sys.state(),
+                        watch.clone(),
+                    ));
                     write_checkpoint(ctx, spec, &h, &payload)?;
                     ctx.last_checkpoint = Instant::now();
                 }
@@ -1068,10 +1108,24 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
             // Resumable from exactly here.
             if let Some(spec) = &opts.checkpoint {
                 let h = ctx.header(k, true, t0, steps0, wall);
-                let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
+                let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(
+                    sys.state(),
+                    watch.clone(),
+                ));
                 write_checkpoint(ctx, spec, &h, &payload)?;
             }
         }
+        let relaxation = if watch.damping_on() {
+            watch.report(
+                t0,
+                &mut pair_list(sys),
+                sys.packing_fraction(),
+                &sys.s,
+                sys.cell.l,
+            )
+        } else {
+            None
+        };
         ctx.reports.push(StepReport {
             index: k,
             kind: kind.into(),
@@ -1080,12 +1134,22 @@ fn run_stages<D: Dim, L: ContactLaw<D>>(
             steps: sys.step - steps0,
             wall_seconds: wall,
             checks,
+            peak_strain_rate: watch.peak_strain_rate,
+            relaxation,
         });
         if end == StepEnd::Interrupted {
             return Ok(true);
         }
     }
     Ok(false)
+}
+
+/// Interacting pairs (i < j) of the current state.
+fn pair_list<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> Vec<(u32, u32)> {
+    sys.interactions()
+        .iter()
+        .map(|c| (c.i.min(c.j) as u32, c.i.max(c.j) as u32))
+        .collect()
 }
 
 /// Consecutive-step correlation of the net forces below which a check counts as flipping.
@@ -1206,6 +1270,9 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(
         kinetic_ratio: ke / (c.kinetic * f_ref),
         kinetic_per_grain: ke,
         free_spin_per_grain: ke_free / n,
+        strain_rate: (0..D::D)
+            .map(|a| (sys.cell.ldot[a] / sys.cell.l[a]).abs())
+            .fold(0.0, f64::max),
         interactions: inter.len(),
         clusters: if matches!(step, Step::Aggregate { .. }) {
             clusters(sys.len(), &inter)
