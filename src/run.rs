@@ -123,7 +123,7 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
         if plain && last_line.elapsed().as_secs_f64() >= 5.0 {
             last_line = std::time::Instant::now();
             eprintln!(
-                "  stage {}/{} {} t={:.4e}/{:.1e} Φ={:.4} {} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}{}",
+                "  stage {}/{} {} t={:.4e}/{:.1e} Φ={:.4} {} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}{}{}",
                 p.step_index + 1,
                 p.step_count,
                 p.step_kind,
@@ -136,7 +136,8 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                 c.stress_ratio,
                 c.kinetic_ratio,
                 c.interactions,
-                clusters_text(c)
+                clusters_text(c),
+                if p.relaxing { " relaxing" } else { "" }
             );
         }
         bar.set_prefix(format!(
@@ -251,6 +252,25 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                 c.stress_ratio,
                 clusters_text(c)
             );
+            if s.peak_strain_rate > 0.0 {
+                println!(
+                    "           peak strain rate |L̇/L| = {:.4e}",
+                    s.peak_strain_rate
+                );
+            }
+            if let Some(r) = &s.relaxation {
+                println!(
+                    "           relaxation from t = {:.4e} (damping γ = {}, ζ_t = {}): {} pairs, {} gained, {} lost, ΔΦ = {:.2e}, largest displacement {:.2e} a",
+                    r.start_time,
+                    r.damping,
+                    r.tangential_zeta,
+                    r.pairs,
+                    r.pairs_gained,
+                    r.pairs_lost,
+                    r.delta_phi,
+                    r.max_displacement
+                );
+            }
         }
     }
     if outcome.contacts_at_threshold > 0 {

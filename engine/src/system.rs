@@ -251,6 +251,19 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         self.max_disp = maxd.sqrt();
     }
 
+    /// Background damping of a relaxation (engine/src/relax.rs): peculiar velocities and
+    /// spins multiplied by `factor` = e^{−γ dt}, once per step after the closing kick.
+    pub fn damp(&mut self, factor: f64) {
+        for u in &mut self.u {
+            *u = *u * factor;
+        }
+        if L::MOMENTS {
+            for w in &mut self.w {
+                *w = *w * factor;
+            }
+        }
+    }
+
     /// Measured stress σ (AR07 (8)): (contact + kinetic virial)/Ω.
     pub fn stress(&self) -> Tensor {
         let omega = self.cell.volume();

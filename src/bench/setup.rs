@@ -53,14 +53,22 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
     };
     let mut stage = stages[k].1.clone();
     match &mut stage {
-        Step::Compress { criteria, .. } => *criteria = never.clone(),
+        // Throughput of the paper's law: no damped final phase either.
+        Step::Compress {
+            criteria, relax, ..
+        } => {
+            *criteria = never.clone();
+            *relax = None;
+        }
         Step::FixedVolume {
             criteria,
             full_time,
+            relax,
             ..
         } => {
             *criteria = never.clone();
             *full_time = true;
+            *relax = None;
         }
         // A fixed cell for S steps: no cluster count to stop on.
         Step::Aggregate {
@@ -74,6 +82,7 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
                 full_time: true,
                 mu: *mu,
                 kappa: *kappa,
+                relax: None,
             }
         }
         other => unreachable!("stages() unrolls {}", other.kind()),

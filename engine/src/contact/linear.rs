@@ -154,6 +154,10 @@ impl<D: Dim, C: CohesionModel, F: Friction, R: RollingResistance> ContactLaw<D>
         }
     }
 
+    fn with_tangential_damping(&self, zeta_t: f64) -> Self {
+        Linear { zeta_t, ..*self }
+    }
+
     fn describe(&self) -> String {
         let mut s = format!(
             "linear K_N={:.4e} K_T={:.4e} ζ={} μ={}",

@@ -84,6 +84,13 @@ pub trait ContactLaw<D: Dim>: Copy + Send + Sync + std::fmt::Debug + 'static {
     /// The same law with the stiffness parameter κ multiplied by `factor` (GRC07 §III.B.2:
     /// κ ramps); `factor = 1` returns the law unchanged, bit for bit.
     fn with_kappa_scaled(&self, factor: f64) -> Self;
+    /// The same law with tangential and rolling dashpots of `zeta_t` (fraction of critical;
+    /// the final relaxation of a stage, engine/src/relax.rs). Laws without them (Hertz–Mindlin,
+    /// AR07 §II.A has no tangential viscosity) return themselves; the scene validator refuses
+    /// `relax.tangential_zeta` > 0 for them.
+    fn with_tangential_damping(&self, _zeta_t: f64) -> Self {
+        *self
+    }
     /// Tangential force and rolling moment stored in the history (for snapshots).
     fn stored(&self, hist: &Self::History) -> (D::V, D::Ang);
 }

@@ -147,6 +147,9 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, num: &StageNumerics
         kinetic_ratio: ke / (num.kinetic * f_ref),
         kinetic_per_grain: ke,
         free_spin_per_grain: ke_free / n,
+        strain_rate: (0..D::D)
+            .map(|a| (sys.cell.ldot[a] / sys.cell.l[a]).abs())
+            .fold(0.0, f64::max),
         interactions: inter.len(),
         clusters: if num.aggregate {
             clusters(sys.len(), &inter)

@@ -11,6 +11,7 @@ pub mod checks;
 pub mod numerics;
 pub mod options;
 pub mod output;
+pub mod relax;
 pub mod report;
 pub mod setup;
 pub mod stages;
@@ -68,7 +69,7 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
                     .map_err(|e| ctx.setup_error(e))?
                 {
                     Payload::AtStart(g) => ctx.grains = g,
-                    Payload::Inside(_) => {
+                    Payload::Inside(..) => {
                         return Err(
                             ctx.setup_error("checkpoint payload does not match its header".into())
                         )
@@ -215,9 +216,9 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
         Some((h, payload)) => match checkpoint::decode::<Payload<D, L::History>>(&payload)
             .map_err(|e| ctx.setup_error(e))?
         {
-            Payload::Inside(st) => (
+            Payload::Inside(st, watch) => (
                 System::from_state(law, st),
-                Some((h.stage_time0, h.stage_steps0, h.stage_wall)),
+                Some((h.stage_time0, h.stage_steps0, h.stage_wall, watch)),
             ),
             Payload::AtStart(_) => {
                 return Err(ctx.setup_error("checkpoint payload does not match its header".into()))

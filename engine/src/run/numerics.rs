@@ -4,7 +4,7 @@
 
 use crate::contact::ContactLaw;
 use crate::geometry::Dim;
-use crate::scene::{Criteria, ForceScale, Law, Mu, Scene, Step};
+use crate::scene::{Criteria, ForceScale, Law, Mu, Relax, Scene, Step};
 use crate::system::System;
 
 /// What a DEM stage reads from the scene: time step, check cadence, blow-up limit, equilibrium
@@ -35,8 +35,12 @@ pub struct StageNumerics {
     pub compress: bool,
     pub aggregate: bool,
     pub full_time: bool,
-    /// Time limit of the stage.
+    /// Time limit of the stage, and the time over which every check must meet the criteria
+    /// before it ends (`criteria.window`, 0: the first check that meets them).
     pub max_time: f64,
+    pub window: f64,
+    /// The stage's final relaxation, if any (engine/src/run/relax.rs).
+    pub relax: Option<Relax>,
     /// The law has cohesion (force unit F0).
     pub cohesive: bool,
     /// The law's friction coefficient and rolling threshold μ_r (∞ without rolling
@@ -66,6 +70,8 @@ impl StageNumerics {
             aggregate: false,
             full_time: false,
             max_time: 0.0,
+            window: 0.0,
+            relax: None,
             cohesive: scene.law.cohesion().is_some(),
             mu: scene.law.mu(),
             mu_r: match &scene.law {
@@ -107,6 +113,8 @@ impl StageNumerics {
                 }
             ),
             max_time: step.max_time(),
+            window: criteria.window,
+            relax: step.relax(),
             ..Self::of_scene(scene)
         }
     }

@@ -15,6 +15,8 @@ pub struct Progress {
     pub max_time: f64,
     pub steps: u64,
     pub checks: Checks,
+    /// The stage's damped final phase is on (engine/src/run/relax.rs).
+    pub relaxing: bool,
 }
 
 /// Equilibrium measures at one check, in units of the criteria.
@@ -37,6 +39,9 @@ pub struct Checks {
     pub kinetic_per_grain: f64,
     /// Rotational energy per grain of grains without any contact, not counted above.
     pub free_spin_per_grain: f64,
+    /// Largest strain rate max_α |L̇_α/L_α| (1/time unit; 0 in a fixed cell).
+    #[serde(default)]
+    pub strain_rate: f64,
     /// Interacting pairs.
     pub interactions: usize,
     /// Clusters of interacting grains (`aggregate` stages only, else 0).
@@ -99,6 +104,12 @@ pub struct StepReport {
     pub steps: u64,
     pub wall_seconds: f64,
     pub checks: Checks,
+    /// Largest strain rate |L̇_α/L_α| seen at a check of the stage (1/time unit).
+    #[serde(default)]
+    pub peak_strain_rate: f64,
+    /// What the damped final phase changed, for a stage with `relax` that reached it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relaxation: Option<super::relax::Relaxation>,
 }
 
 /// Result of a whole run.

@@ -7,6 +7,7 @@ use super::checks::{FLIP_CHECKS, FLIP_CORRELATION};
 use super::numerics::StageNumerics;
 use super::options::{CheckpointSpec, RunOptions};
 use super::output::snapshot_of;
+use super::relax::StageWatch;
 use super::report::{Checks, Progress, RunError, StepEnd, StepReport};
 use super::setup::{build_system, initial_grains, Grains};
 use crate::cell::Control;
@@ -29,7 +30,8 @@ use std::time::Instant;
 #[allow(clippy::large_enum_variant)] // one per checkpoint write, short-lived
 pub(super) enum Payload<D: Dim, H> {
     AtStart(Grains<D>),
-    Inside(State<D, H>),
+    /// The integrator state and what the stage watches across its checks.
+    Inside(State<D, H>, StageWatch<D>),
 }
 
 /// Bookkeeping carried through the stages.
@@ -189,6 +191,8 @@ pub(super) fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize, step: &Step) -> Res
             pressure_target: f64::NAN,
             ..Default::default()
         },
+        peak_strain_rate: 0.0,
+        relaxation: None,
     });
     Ok(())
 }
@@ -247,7 +251,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
     ctx: &mut Ctx<D>,
     sys: &mut System<D, L>,
     range: std::ops::Range<usize>,
-    mut resume_at: Option<(f64, u64, f64)>,
+    mut resume_at: Option<(f64, u64, f64, StageWatch<D>)>,
     opts: &mut RunOptions,
 ) -> Result<bool, RunError> {
     let scene = ctx.scene;
@@ -292,7 +296,18 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             }
         }
         let (full_time, aggregate, max_time) = (num.full_time, num.aggregate, num.max_time);
-        let (t0, steps0, wall0) = resume_at.take().unwrap_or((sys.time, sys.step, 0.0));
+        let (t0, steps0, wall0, mut watch) = match resume_at.take() {
+            Some(r) => r,
+            None => (
+                sys.time,
+                sys.step,
+                0.0,
+                StageWatch::new(num.relax, sys.time),
+            ),
+        };
+        if let Some(z) = watch.tangential_zeta() {
+            sys.law = sys.law.with_tangential_damping(z);
+        }
         let step_start = Instant::now();
         let end;
         let mut checks;
@@ -300,6 +315,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         let mut prev_torque: Vec<D::Ang> = Vec::new();
         let mut flips = 0u32;
         loop {
+            let damping = watch.damping_factor(sys.dt);
             for m in 0..num.check_every {
                 if m + 1 == num.check_every {
                     prev_force.clear();
@@ -308,6 +324,9 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     prev_torque.extend_from_slice(&sys.torque);
                 }
                 sys.step();
+                if let Some(f) = damping {
+                    sys.damp(f);
+                }
                 let (ov, i, j) = sys.max_overlap;
                 if ov.is_nan() || ov > num.max_overlap {
                     return Err(unstable(
@@ -336,6 +355,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     max_time,
                     steps: sys.step - steps0,
                     checks: checks.clone(),
+                    relaxing: watch.damping_on(),
                 });
             }
             // Time step past stability: the fastest modes flip sign at every step (the
@@ -387,11 +407,26 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 ));
             }
             sys.save(&mut last_good);
+            if watch.watching()
+                && watch.observe_structure(
+                    sys.time,
+                    &mut pair_list(sys),
+                    checks.kinetic_ratio < 1.0,
+                    checks.packing_fraction,
+                    &sys.s,
+                )
+            {
+                if let Some(z) = watch.tangential_zeta() {
+                    sys.law = sys.law.with_tangential_damping(z);
+                }
+            }
+            watch.peak_strain_rate = watch.peak_strain_rate.max(checks.strain_rate);
+            let held = watch.held(sys.time, checks.equilibrium(), num.window);
             if aggregate && checks.clusters == 1 {
                 end = StepEnd::OneCluster;
                 break;
             }
-            if !aggregate && !full_time && checks.equilibrium() {
+            if !aggregate && !full_time && held {
                 end = StepEnd::Equilibrium;
                 break;
             }
@@ -407,8 +442,10 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 if ctx.last_checkpoint.elapsed().as_secs_f64() >= spec.every {
                     let wall = wall0 + step_start.elapsed().as_secs_f64();
                     let h = ctx.header(k, true, t0, steps0, wall);
-                    let payload =
-                        checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
+                    let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(
+                        sys.state(),
+                        watch.clone(),
+                    ));
                     write_checkpoint(ctx, spec, &h, &payload)?;
                     ctx.last_checkpoint = Instant::now();
                 }
@@ -425,10 +462,24 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             // Resumable from exactly here.
             if let Some(spec) = &opts.checkpoint {
                 let h = ctx.header(k, true, t0, steps0, wall);
-                let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(sys.state()));
+                let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(
+                    sys.state(),
+                    watch.clone(),
+                ));
                 write_checkpoint(ctx, spec, &h, &payload)?;
             }
         }
+        let relaxation = if watch.damping_on() {
+            watch.report(
+                t0,
+                &mut pair_list(sys),
+                sys.packing_fraction(),
+                &sys.s,
+                sys.cell.l,
+            )
+        } else {
+            None
+        };
         ctx.reports.push(StepReport {
             index: k,
             kind: kind.into(),
@@ -437,12 +488,22 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             steps: sys.step - steps0,
             wall_seconds: wall,
             checks,
+            peak_strain_rate: watch.peak_strain_rate,
+            relaxation,
         });
         if end == StepEnd::Interrupted {
             return Ok(true);
         }
     }
     Ok(false)
+}
+
+/// Interacting pairs (i < j) of the current state.
+fn pair_list<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> Vec<(u32, u32)> {
+    sys.interactions()
+        .iter()
+        .map(|c| (c.i.min(c.j) as u32, c.i.max(c.j) as u32))
+        .collect()
 }
 
 /// The common start of a cross-code comparison: the scene's initial grains with its leading

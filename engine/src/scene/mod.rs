@@ -275,6 +275,9 @@ pub enum Step {
         /// the time step follows the stiffness).
         #[serde(default)]
         kappa: Option<f64>,
+        /// Final relaxation once the structure has settled (see [`Relax`]).
+        #[serde(default)]
+        relax: Option<Relax>,
     },
     /// Fixed cell.
     FixedVolume {
@@ -288,6 +291,9 @@ pub enum Step {
         mu: Option<Mu>,
         #[serde(default)]
         kappa: Option<f64>,
+        /// Final relaxation once the structure has settled (see [`Relax`]).
+        #[serde(default)]
+        relax: Option<Relax>,
     },
     /// Fixed cell until all grains form one cluster of interacting grains (GRC07 §III.B,
     /// method 2: aggregation of a cohesive gas).
@@ -313,6 +319,9 @@ pub enum Step {
         criteria: Criteria,
         #[serde(default)]
         mu: Option<Mu>,
+        /// Final relaxation once the structure has settled (see [`Relax`]).
+        #[serde(default)]
+        relax: Option<Relax>,
     },
     /// Stepwise pressure program: P = `from`·`factor`^k (or divided, when unloading) up to
     /// `to`, each level a `compress` step run to its criteria (AR07 T.III QS rows; GRC08
@@ -328,6 +337,9 @@ pub enum Step {
         criteria: Criteria,
         #[serde(default)]
         mu: Option<Mu>,
+        /// Final relaxation once the structure has settled (see [`Relax`]).
+        #[serde(default)]
+        relax: Option<Relax>,
     },
     /// Event-driven hard-sphere (hard-disk) dynamics in the fixed cell with elastic collisions
     /// until `collisions_per_grain` collisions per grain on average, from Maxwell velocities;
@@ -415,6 +427,16 @@ impl Step {
             _ => None,
         }
     }
+    /// The final relaxation of a DEM stage.
+    pub fn relax(&self) -> Option<Relax> {
+        match self {
+            Step::Compress { relax, .. }
+            | Step::FixedVolume { relax, .. }
+            | Step::PressureProgram { relax, .. }
+            | Step::KappaRamp { relax, .. } => *relax,
+            _ => None,
+        }
+    }
     /// Pressure levels of a pressure program, `from` to `to` inclusive.
     pub fn pressure_levels(from: f64, to: f64, factor: f64) -> Vec<f64> {
         let mut levels = vec![from];
@@ -432,6 +454,25 @@ impl Step {
             levels.push(p);
         }
     }
+}
+
+/// Final relaxation of a DEM stage (issue 12; engine/src/relax.rs): once the interaction list
+/// has been unchanged for `settle_time` with the kinetic criterion met, the peculiar velocities
+/// and spins are damped at rate `damping` (v ← v e^{−γ dt} each step) and, when
+/// `tangential_zeta` > 0, tangential and rolling dashpots of that fraction of critical act in
+/// the contacts, until the criteria hold. Before the switch the law is the paper's, exactly.
+///
+/// In a scene: `relax = { damping = 1.0, tangential_zeta = 0.5, settle_time = 10.0 }`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Relax {
+    /// Background damping rate γ, per time unit (T0 with cohesion).
+    pub damping: f64,
+    /// Tangential and rolling dashpot, fraction of critical (linear law only).
+    #[serde(default)]
+    pub tangential_zeta: f64,
+    /// Time the interaction list must stay unchanged before the damping starts.
+    pub settle_time: f64,
 }
 
 /// Equilibrium criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), in units of a force scale
@@ -452,6 +493,15 @@ pub struct Criteria {
     pub pressure: f64,
     /// Kinetic energy per grain, in F_ref·a.
     pub kinetic: f64,
+    /// Time over which every check must meet the criteria before the stage ends (0: the first
+    /// check that meets them). A window of about one period of the slowest rolling mode
+    /// (~2 T0) keeps a vibrating packing from passing at a lucky instant.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub window: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// Scene form of [`Criteria`]: a preset and overrides.
@@ -464,6 +514,7 @@ struct CriteriaTable {
     moment: Option<f64>,
     pressure: Option<f64>,
     kinetic: Option<f64>,
+    window: Option<f64>,
 }
 
 impl TryFrom<CriteriaTable> for Criteria {
@@ -485,6 +536,7 @@ impl TryFrom<CriteriaTable> for Criteria {
             moment: t.moment.unwrap_or(base.moment),
             pressure: t.pressure.unwrap_or(base.pressure),
             kinetic: t.kinetic.unwrap_or(base.kinetic),
+            window: t.window.unwrap_or(base.window),
         })
     }
 }
@@ -505,6 +557,7 @@ impl Criteria {
             moment: 1e-4,
             pressure: 1e-4,
             kinetic: 1e-8,
+            window: 0.0,
         }
     }
     /// GRC07 §II.D.
@@ -515,6 +568,7 @@ impl Criteria {
             moment: 1e-4,
             pressure: 1e-4,
             kinetic: 5e-8,
+            window: 0.0,
         }
     }
     /// GRC08 §II.D.1: as GRC07 with 1e-5.
@@ -565,6 +619,7 @@ impl Scene {
                     max_time,
                     criteria,
                     mu,
+                    relax,
                 } => {
                     for p in Step::pressure_levels(*from, *to, *factor) {
                         out.push((
@@ -576,6 +631,7 @@ impl Scene {
                                 criteria: criteria.clone(),
                                 mu: *mu,
                                 kappa: None,
+                                relax: *relax,
                             },
                         ));
                     }
@@ -589,6 +645,7 @@ impl Scene {
                     max_time,
                     criteria,
                     mu,
+                    relax,
                 } => {
                     for level in Step::pressure_levels(*from, *to, *factor) {
                         out.push((
@@ -600,6 +657,7 @@ impl Scene {
                                 criteria: criteria.clone(),
                                 mu: *mu,
                                 kappa: Some(level),
+                                relax: *relax,
                             },
                         ));
                     }

@@ -353,6 +353,18 @@ impl Scene {
                 positive(&f("criteria.moment"), c.moment)?;
                 positive(&f("criteria.pressure"), c.pressure)?;
                 positive(&f("criteria.kinetic"), c.kinetic)?;
+                in_range(&f("criteria.window"), c.window, 0.0, step.max_time())?;
+                if let Some(r) = step.relax() {
+                    positive(&f("relax.damping"), r.damping)?;
+                    in_range(&f("relax.settle_time"), r.settle_time, 0.0, step.max_time())?;
+                    in_range(&f("relax.tangential_zeta"), r.tangential_zeta, 0.0, 1.0)?;
+                    if r.tangential_zeta > 0.0 && !matches!(self.law, Law::Linear { .. }) {
+                        return Err(err(
+                            &f("relax.tangential_zeta"),
+                            "tangential and rolling dashpots exist in the linear law only; use 0 with the Hertz–Mindlin law".into(),
+                        ));
+                    }
+                }
                 if c.scale == ForceScale::Cohesion && !cohesive {
                     return Err(err(
                         &f("criteria.scale"),

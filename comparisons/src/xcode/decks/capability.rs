@@ -76,6 +76,8 @@ pub enum Feature {
     MultiStage,
     /// Equilibrium criteria on forces, stress and kinetic energy (AR07 §III, GRC07 §II.D).
     EquilibriumCriteria,
+    /// Background damping once the interaction list has settled (`relax`, issue 12).
+    FinalRelaxation,
     /// Hard-grain stages before the first DEM stage (melting, growth, expansion).
     HardGrainPrelude,
     /// Hard-grain stages between DEM stages (AR07 §IV.B state C: expand, mix, compress again).
@@ -85,7 +87,7 @@ pub enum Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 21] = [
+    pub const ALL: [Feature; 22] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -104,6 +106,7 @@ impl Feature {
         Feature::OneClusterStop,
         Feature::MultiStage,
         Feature::EquilibriumCriteria,
+        Feature::FinalRelaxation,
         Feature::HardGrainPrelude,
         Feature::HardGrainInterlude,
         Feature::ContactDump,
@@ -129,6 +132,7 @@ impl Feature {
             Feature::OneClusterStop => "one-cluster-stop",
             Feature::MultiStage => "multi-stage",
             Feature::EquilibriumCriteria => "equilibrium-criteria",
+            Feature::FinalRelaxation => "final-relaxation",
             Feature::HardGrainPrelude => "hard-grain-prelude",
             Feature::HardGrainInterlude => "hard-grain-interlude",
             Feature::ContactDump => "contact-dump",
@@ -155,6 +159,9 @@ impl Feature {
             Feature::OneClusterStop => "stop when all grains form one cluster (GRC07 method 2)",
             Feature::MultiStage => "several DEM stages (pressure or κ programs)",
             Feature::EquilibriumCriteria => "force, moment, stress and kinetic-energy criteria",
+            Feature::FinalRelaxation => {
+                "background damping once the interaction list has settled (`relax`)"
+            }
             Feature::HardGrainPrelude => "hard-grain stages before the first DEM stage",
             Feature::HardGrainInterlude => "hard-grain stages between DEM stages (AR07 state C)",
             Feature::ContactDump => "per-contact dump: pair, branch, N, T, rolling moment",
@@ -223,6 +230,14 @@ pub fn features(start: &Start) -> Vec<Feature> {
         f.push(Feature::MultiStage);
     }
     f.push(Feature::EquilibriumCriteria);
+    if start
+        .scene
+        .stages()
+        .iter()
+        .any(|(_, s)| s.relax().is_some())
+    {
+        f.push(Feature::FinalRelaxation);
+    }
     if !start.prelude.is_empty() {
         f.push(Feature::HardGrainPrelude);
     }
@@ -234,6 +249,9 @@ pub fn features(start: &Start) -> Vec<Feature> {
     f.dedup();
     f
 }
+
+const RELAX: &str =
+    "the switch to background damping on a settled interaction list is not generated";
 
 const INTERLUDE: &str = "no event-driven hard-grain dynamics; grainbench prepares hard-grain stages only before the first DEM stage";
 
@@ -254,6 +272,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::TangentialDamping => Unsupported("tangential damping in `linear_history` is not generated"),
             F::StressControl => Approximate("fix press/berendsen aniso on the virial stress: each axis' strain rate is (P − σ_αα)/(3Bτ), at the cap only while σ_αα ≈ 0, no cell mass"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::FinalRelaxation => Unsupported(RELAX),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the barostat; contact history carries over"),
             F::EquilibriumCriteria => Approximate("same measures (free spins of grains without contact left out), checked every check_every steps by fix halt on forces computed before that step's Berendsen dilation"),
@@ -272,6 +291,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Disks => Unsupported("2D decks not generated for LIGGGHTS"),
             F::StressControl => Approximate("no barostat fix: per-axis servo of fix deform, strain rate ∝ virial stress error (full cap beyond 50 % of the target), no cell mass"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::FinalRelaxation => Unsupported(RELAX),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the servo; contact history carries over"),
             F::EquilibriumCriteria => Approximate("criteria as ours (kinetic energy: translation of all grains, rotation of grains with a contact), checked between runs of check_every steps"),
@@ -290,6 +310,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Disks => Unsupported("2D disks (blockedDOFs emulation) not generated"),
             F::StressControl => Approximate("AR07 (7) cell dynamics and rate cap integrated by a script servo (PyRunner each step, O.cell.velGrad) on the contact stress only; PeriTriaxController hunted around 1.01–1.09 P"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::FinalRelaxation => Unsupported(RELAX),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("κ and μ changes rescale kno, kso and tan φ of existing contacts (not checked by a test)"),
             _ => Exact,

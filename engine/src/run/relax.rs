@@ -1,0 +1,298 @@
+//! Final relaxation of a DEM stage and the windowed equilibrium test (issue 12).
+//!
+//! GRC07's adhesive law damps only the normal relative velocity of touching grains, so the
+//! rolling and tangential modes of one-contact grains, chains and loops (uncoupled from the
+//! normal gap at first order at h0 = F0/K_N) keep vibrating with e-folding times of 10³–10⁵ T0
+//! after the structure has stopped changing: the net-force criterion of GRC07 §II.D is never
+//! met. A stage with `relax` runs GRC07's law exactly until the interaction list has been
+//! unchanged for `settle_time` with the kinetic criterion met, then switches on background
+//! damping of the peculiar velocities and spins (and, optionally, tangential and rolling
+//! dashpots) until the criteria hold over a window. [`Relaxation`] reports what the damped
+//! phase changed: pairs gained and lost, ΔΦ and the largest grain displacement.
+
+use crate::geometry::{Dim, VectorOps as _};
+use crate::scene::Relax;
+use serde::{Deserialize, Serialize};
+
+/// What the damped phase of a stage changed (in the stage report).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Relaxation {
+    /// Stage time at which the damping was switched on.
+    pub start_time: f64,
+    /// Background damping rate γ and tangential/rolling dashpot ζ_t that were applied.
+    pub damping: f64,
+    pub tangential_zeta: f64,
+    /// Interacting pairs at the switch, and those gained and lost since.
+    pub pairs: usize,
+    pub pairs_gained: usize,
+    pub pairs_lost: usize,
+    /// Φ(end) − Φ(switch).
+    pub delta_phi: f64,
+    /// Largest displacement of a grain centre relative to the cell since the switch (nearest
+    /// image of the reduced displacement, scaled by the cell lengths at the end), in a.
+    pub max_displacement: f64,
+}
+
+/// The state at the switch, kept to measure what the damped phase changes.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound = "")]
+struct Switch<D: Dim> {
+    time: f64,
+    pairs: Vec<(u32, u32)>,
+    phi: f64,
+    s: Vec<D::V>,
+}
+
+/// What a stage watches across its checks: settling of the interaction list, the damped
+/// phase, how long the criteria have held, the peak strain rate. Saved in checkpoints so that
+/// a resumed run ends bit-identical to an uninterrupted one.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound = "")]
+pub struct StageWatch<D: Dim> {
+    relax: Option<Relax>,
+    /// Hash of the sorted interaction list at the last check, and since when it is unchanged.
+    pairs_hash: u64,
+    unchanged_since: f64,
+    switch: Option<Switch<D>>,
+    /// Stage time since which every check met the criteria.
+    held_since: Option<f64>,
+    /// Largest strain rate max_α |L̇_α/L_α| seen at a check.
+    pub peak_strain_rate: f64,
+}
+
+impl<D: Dim> StageWatch<D> {
+    pub fn new(relax: Option<Relax>, time: f64) -> Self {
+        StageWatch {
+            relax,
+            pairs_hash: 0,
+            unchanged_since: time,
+            switch: None,
+            held_since: None,
+            peak_strain_rate: 0.0,
+        }
+    }
+
+    /// Whether the interaction list is still being watched for the switch.
+    pub fn watching(&self) -> bool {
+        self.relax.is_some() && self.switch.is_none()
+    }
+
+    /// Whether the damped phase is on.
+    pub fn damping_on(&self) -> bool {
+        self.switch.is_some()
+    }
+
+    /// Velocity factor e^{−γ dt} of one step of the damped phase (`None` before it).
+    pub fn damping_factor(&self, dt: f64) -> Option<f64> {
+        match (&self.relax, &self.switch) {
+            (Some(r), Some(_)) => Some((-r.damping * dt).exp()),
+            _ => None,
+        }
+    }
+
+    /// ζ_t of the damped phase, when it is on and asks for one.
+    pub fn tangential_zeta(&self) -> Option<f64> {
+        match (&self.relax, &self.switch) {
+            (Some(r), Some(_)) if r.tangential_zeta > 0.0 => Some(r.tangential_zeta),
+            _ => None,
+        }
+    }
+
+    /// Looks at one check: the interaction list `pairs` (i < j, any order), whether the
+    /// kinetic criterion holds, Φ and the reduced positions. Returns true when the damped
+    /// phase starts at this check.
+    pub fn observe_structure(
+        &mut self,
+        time: f64,
+        pairs: &mut [(u32, u32)],
+        kinetic_ok: bool,
+        phi: f64,
+        s: &[D::V],
+    ) -> bool {
+        let Some(relax) = self.relax else {
+            return false;
+        };
+        if self.switch.is_some() {
+            return false;
+        }
+        pairs.sort_unstable();
+        let hash = fnv1a(pairs);
+        if hash != self.pairs_hash {
+            self.pairs_hash = hash;
+            self.unchanged_since = time;
+        }
+        if kinetic_ok && time - self.unchanged_since >= relax.settle_time {
+            self.switch = Some(Switch {
+                time,
+                pairs: pairs.to_vec(),
+                phi,
+                s: s.to_vec(),
+            });
+            return true;
+        }
+        false
+    }
+
+    /// Records whether the criteria hold at this check; true when they have held at every
+    /// check over the last `window` of time (at once when `window` is 0).
+    pub fn held(&mut self, time: f64, equilibrium: bool, window: f64) -> bool {
+        if !equilibrium {
+            self.held_since = None;
+            return false;
+        }
+        let since = *self.held_since.get_or_insert(time);
+        time - since >= window
+    }
+
+    /// What the damped phase changed, from the state at the end of the stage.
+    pub fn report(
+        &self,
+        t0: f64,
+        pairs: &mut [(u32, u32)],
+        phi: f64,
+        s: &[D::V],
+        l: D::V,
+    ) -> Option<Relaxation> {
+        let (relax, sw) = (self.relax?, self.switch.as_ref()?);
+        pairs.sort_unstable();
+        let common = count_common(&sw.pairs, pairs);
+        let max_displacement =
+            sw.s.iter()
+                .zip(s)
+                .map(|(a, b)| {
+                    let mut d = *b - *a;
+                    for k in 0..D::D {
+                        d[k] -= d[k].round();
+                        d[k] *= l[k];
+                    }
+                    d.norm_squared()
+                })
+                .fold(0.0, f64::max)
+                .sqrt();
+        Some(Relaxation {
+            start_time: sw.time - t0,
+            damping: relax.damping,
+            tangential_zeta: relax.tangential_zeta,
+            pairs: sw.pairs.len(),
+            pairs_gained: pairs.len() - common,
+            pairs_lost: sw.pairs.len() - common,
+            delta_phi: phi - sw.phi,
+            max_displacement,
+        })
+    }
+}
+
+/// Pairs present in both sorted lists.
+fn count_common(a: &[(u32, u32)], b: &[(u32, u32)]) -> usize {
+    let (mut i, mut j, mut n) = (0, 0, 0);
+    while i < a.len() && j < b.len() {
+        match a[i].cmp(&b[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                n += 1;
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    n
+}
+
+/// FNV-1a of a sorted pair list (a change of the list changes the hash but for collisions
+/// of probability 2⁻⁶⁴).
+fn fnv1a(pairs: &[(u32, u32)]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &(i, j) in pairs {
+        for b in i.to_le_bytes().into_iter().chain(j.to_le_bytes()) {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h ^ pairs.len() as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::D2;
+    use nalgebra::Vector2;
+
+    fn relax() -> Relax {
+        Relax {
+            damping: 1.0,
+            tangential_zeta: 0.0,
+            settle_time: 2.0,
+        }
+    }
+
+    #[test]
+    fn switches_on_after_the_list_settles_with_low_kinetic_energy() {
+        let s = vec![Vector2::new(0.1, 0.2), Vector2::new(0.5, 0.5)];
+        let mut st = StageWatch::<D2>::new(Some(relax()), 0.0);
+        assert!(!st.observe_structure(0.0, &mut [(0, 1)], true, 0.5, &s));
+        // The list changes at t = 1: the clock restarts.
+        assert!(!st.observe_structure(1.0, &mut [(0, 1), (1, 2)], true, 0.5, &s));
+        assert!(!st.observe_structure(2.5, &mut [(1, 2), (0, 1)], true, 0.5, &s));
+        // Settled for 2, but kinetic energy too high.
+        assert!(!st.observe_structure(3.0, &mut [(0, 1), (1, 2)], false, 0.5, &s));
+        assert!(st.damping_factor(0.1).is_none());
+        assert!(st.observe_structure(3.1, &mut [(0, 1), (1, 2)], true, 0.5, &s));
+        assert!(st.damping_on());
+        assert!((st.damping_factor(0.1).unwrap() - (-0.1f64).exp()).abs() < 1e-15);
+        // Once on, it stays on.
+        assert!(!st.observe_structure(4.0, &mut [(0, 1)], true, 0.5, &s));
+        assert!(st.damping_on());
+    }
+
+    #[test]
+    fn without_relax_nothing_switches() {
+        let s = vec![Vector2::new(0.1, 0.2)];
+        let mut st = StageWatch::<D2>::new(None, 0.0);
+        assert!(!st.observe_structure(100.0, &mut [], true, 0.5, &s));
+        assert!(st.damping_factor(0.1).is_none());
+        assert!(st
+            .report(0.0, &mut [], 0.5, &s, Vector2::new(1.0, 1.0))
+            .is_none());
+    }
+
+    #[test]
+    fn window_requires_every_check_to_hold() {
+        let mut st = StageWatch::<D2>::new(None, 0.0);
+        assert!(
+            st.held(0.0, true, 0.0),
+            "window 0: the first check that holds ends"
+        );
+        let mut st = StageWatch::<D2>::new(None, 0.0);
+        assert!(!st.held(1.0, true, 2.0));
+        assert!(!st.held(2.0, true, 2.0));
+        assert!(!st.held(2.5, false, 2.0));
+        assert!(!st.held(3.0, true, 2.0));
+        assert!(!st.held(4.9, true, 2.0));
+        assert!(st.held(5.0, true, 2.0));
+    }
+
+    #[test]
+    fn report_counts_pairs_and_the_periodic_displacement() {
+        let s0 = vec![Vector2::new(0.99, 0.5), Vector2::new(0.5, 0.5)];
+        let mut st = StageWatch::<D2>::new(Some(relax()), 10.0);
+        st.observe_structure(10.0, &mut [(0, 1), (1, 2)], true, 0.6, &s0);
+        st.observe_structure(12.0, &mut [(0, 1), (1, 2)], true, 0.6, &s0);
+        assert!(st.damping_on());
+        // Grain 0 crosses the boundary: 0.99 → 0.01 is a displacement of 0.02 cell lengths.
+        let s1 = vec![Vector2::new(0.01, 0.5), Vector2::new(0.5, 0.5)];
+        let r = st
+            .report(
+                10.0,
+                &mut [(1, 2), (2, 3), (3, 4)],
+                0.61,
+                &s1,
+                Vector2::new(10.0, 10.0),
+            )
+            .unwrap();
+        assert_eq!(r.start_time, 2.0);
+        assert_eq!((r.pairs, r.pairs_gained, r.pairs_lost), (2, 2, 1));
+        assert!((r.delta_phi - 0.01).abs() < 1e-12);
+        assert!((r.max_displacement - 0.2).abs() < 1e-12);
+    }
+}
