@@ -2,7 +2,7 @@
 
 use crate::common::analysis_of;
 use anyhow::{bail, Result};
-use grainbench_comparisons::{decks::Code, import};
+use grainbench_comparisons::xcode::{import, Code};
 use grainbench_engine::Snapshot;
 use std::path::Path;
 

@@ -7,10 +7,10 @@
 use crate::common::STOP;
 use crate::xcode;
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::crosscode::CodeResult;
-use grainbench_comparisons::decks::{self, Code, Start};
-use grainbench_comparisons::import::{self, Meta};
 use grainbench_comparisons::outcome::Outcome;
+use grainbench_comparisons::xcode::crosscode::CodeResult;
+use grainbench_comparisons::xcode::decks::{self, Code, Start};
+use grainbench_comparisons::xcode::import::{self, Meta};
 use grainbench_engine::snapshot::Snapshot;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};

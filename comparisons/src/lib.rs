@@ -45,10 +45,3 @@ pub use metrics::rattlers::{find_rattlers, Rattlers, Rule};
 pub use metrics::series::{Histogram, Series};
 pub use metrics::structure::{gap_coordination, pair_correlation};
 pub use metrics::{analyze, Analysis, Options};
-
-// Old module paths, so that branches written before the grouping still build once merged;
-// new code uses the folder paths. Remove when nothing uses them.
-#[doc(hidden)]
-pub use report::{paper, plots, reproduction};
-#[doc(hidden)]
-pub use xcode::{crosscode, decks, import};

@@ -3,7 +3,7 @@
 //! outputs (`ran`, `missing`, `timeout`, …); the final state of a run that ended is said
 //! apart, by the snapshot's status (`equilibrium`, `time-limit`).
 //!
-//! [`CodeResult`]: crate::crosscode::CodeResult
+//! [`CodeResult`]: crate::xcode::crosscode::CodeResult
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

@@ -2,7 +2,7 @@
 //! settings of one run, and the scene with those settings applied.
 
 use anyhow::{Context, Result};
-use grainbench_comparisons::decks::Code;
+use grainbench_comparisons::xcode::decks::Code;
 use grainbench_engine::scene::{Criteria, Law, Step};
 use grainbench_engine::Scene;
 use serde_json::{json, Value};

@@ -32,9 +32,9 @@
 use crate::common::{install_stop_handler, load_scene, STOP};
 use crate::external;
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::crosscode::CodeResult;
-use grainbench_comparisons::decks::{Code, Start};
 use grainbench_comparisons::outcome::Outcome;
+use grainbench_comparisons::xcode::crosscode::CodeResult;
+use grainbench_comparisons::xcode::decks::{Code, Start};
 use grainbench_engine::run::{RunError, RunOptions, StepEnd};
 use grainbench_engine::snapshot::write_atomic;
 use grainbench_engine::Scene;

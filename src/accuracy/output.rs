@@ -3,10 +3,10 @@
 use super::knobs::Settings;
 use super::table::{Row, Table, METRICS};
 use anyhow::Result;
-use grainbench_comparisons::decks::Code;
-use grainbench_comparisons::plots;
 use grainbench_comparisons::report::format::{sci4_or_blank, sig3_or_dash};
+use grainbench_comparisons::report::plots;
 use grainbench_comparisons::stats::pareto;
+use grainbench_comparisons::xcode::decks::Code;
 use grainbench_engine::snapshot::write_atomic;
 use grainbench_engine::Scene;
 use serde_json::{json, Value};

@@ -1,9 +1,9 @@
 //! What one run of one point and seed gave, as cached in `runs/<code>/<settings>/seed-S.json`,
 //! and the measures taken on its final packing.
 
-use grainbench_comparisons::decks::Code;
 use grainbench_comparisons::metrics::{analyze, Options};
 use grainbench_comparisons::outcome::Outcome;
+use grainbench_comparisons::xcode::decks::Code;
 use grainbench_engine::snapshot::Snapshot;
 use serde_json::{json, Value};
 

@@ -3,9 +3,9 @@
 
 use super::knobs::{Point, Settings};
 use super::record::{short_message, Record};
-use grainbench_comparisons::decks::Code;
-use grainbench_comparisons::paper;
+use grainbench_comparisons::report::paper;
 use grainbench_comparisons::stats::{ks_distance, mean, pareto, sample_sd};
+use grainbench_comparisons::xcode::decks::Code;
 use grainbench_engine::Scene;
 use std::collections::BTreeMap;
 

@@ -8,9 +8,9 @@ use crate::common::{install_stop_handler, load_scene, set_threads, STOP};
 use crate::external;
 use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::crosscode::CodeResult;
-use grainbench_comparisons::decks::{lammps_table, Code, Deck, Start};
 use grainbench_comparisons::outcome::Outcome;
+use grainbench_comparisons::xcode::crosscode::CodeResult;
+use grainbench_comparisons::xcode::decks::{lammps_table, Code, Deck, Start};
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;
 use report::{notes, rows_of, run_line, to_csv, to_markdown, Report, Run};
@@ -227,7 +227,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
         if code != Code::Rust
             && matches!(code, Code::Lammps | Code::Liggghts)
             && a.threads.iter().any(|&t| t > 1)
-            && grainbench_comparisons::decks::which("mpirun").is_none()
+            && grainbench_comparisons::xcode::decks::which("mpirun").is_none()
             && ready.is_some()
         {
             r.outcome = Outcome::Missing;
@@ -427,7 +427,7 @@ fn run_external(
         if r.version.is_none() {
             r.version = external::version_line(code, &dir.join("stdout.log"));
         }
-        run.status = Some(grainbench_comparisons::import::read_status(
+        run.status = Some(grainbench_comparisons::xcode::import::read_status(
             &dir.join("final.status"),
         ));
         run.steps = external::log_steps(dir);

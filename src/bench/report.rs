@@ -2,11 +2,11 @@
 //! repeats, ratio to our engine), bench.json, bench.md and bench.csv.
 
 use super::setup::Mode;
-use grainbench_comparisons::crosscode::CodeResult;
-use grainbench_comparisons::decks::Code;
 use grainbench_comparisons::outcome::Outcome;
 use grainbench_comparisons::report::format::sci3;
 use grainbench_comparisons::stats::Stat;
+use grainbench_comparisons::xcode::crosscode::CodeResult;
+use grainbench_comparisons::xcode::decks::Code;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

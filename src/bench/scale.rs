@@ -11,7 +11,7 @@
 use crate::common::{install_stop_handler, set_threads, STOP};
 use crate::external;
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::plots::{line_plot, Axis, LinePlot, Marks, Series};
+use grainbench_comparisons::report::plots::{line_plot, Axis, LinePlot, Marks, Series};
 use grainbench_comparisons::stats::Stat;
 use grainbench_engine::cell::{Cell, Control};
 use grainbench_engine::contact::slider::Coulomb;

@@ -1,7 +1,7 @@
 //! What `bench` runs: the scene cut to a fixed number of steps, or started from a snapshot.
 
 use anyhow::{bail, Result};
-use grainbench_comparisons::decks::{StageKind, Start, Tolerances};
+use grainbench_comparisons::xcode::decks::{StageKind, Start, Tolerances};
 use grainbench_engine::geometry::{D2, D3};
 use grainbench_engine::run::initial_grains;
 use grainbench_engine::scene::{Criteria, Scene, Step};

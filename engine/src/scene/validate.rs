@@ -409,8 +409,48 @@ mod tests {
     #[test]
     fn valid_scene_parses_with_presets() {
         let s = Scene::from_toml(BASE, Path::new("s.toml")).unwrap();
-        assert_eq!(s.protocol[0].criteria(), Criteria::grc07());
+        // The scene asks for the criteria to hold over a 2 T0 window (issue 12).
+        assert_eq!(
+            s.protocol[0].criteria(),
+            Criteria {
+                window: 2.0,
+                ..Criteria::grc07()
+            }
+        );
         assert!(s.law.cohesion().is_some());
+        let r = s.protocol[0].relax().unwrap();
+        assert_eq!(
+            (r.damping, r.tangential_zeta, r.settle_time),
+            (1.0, 0.5, 10.0)
+        );
+    }
+
+    #[test]
+    fn relax_and_window_are_checked() {
+        let relax = "relax = { damping = 1.0, tangential_zeta = 0.5, settle_time = 10.0 }";
+        let e = err(&BASE.replace(relax, "relax = { damping = 0.0, settle_time = 10.0 }"));
+        assert_eq!(e.field, "protocol[0].relax.damping", "{e}");
+        let e = err(&BASE.replace(relax, "relax = { damping = 1.0, settle_time = 1e9 }"));
+        assert_eq!(e.field, "protocol[0].relax.settle_time", "{e}");
+        let e = err(&BASE.replace(
+            relax,
+            "relax = { damping = 1.0, tangential_zeta = 2.0, settle_time = 1.0 }",
+        ));
+        assert_eq!(e.field, "protocol[0].relax.tangential_zeta", "{e}");
+        let e = err(&BASE.replace(relax, "relax = { damping = 1.0, settle = 1.0 }"));
+        assert!(e.message.contains("settle"), "{e}");
+        let e = err(&BASE.replace("window = 2.0", "window = -1.0"));
+        assert_eq!(e.field, "protocol[0].criteria.window", "{e}");
+        // Without `relax` and `window` the stage is the paper's, exactly.
+        let plain = Scene::from_toml(
+            &BASE
+                .replace(&format!("{relax}\n"), "")
+                .replace(", window = 2.0", ""),
+            Path::new("s.toml"),
+        )
+        .unwrap();
+        assert_eq!(plain.protocol[0].relax(), None);
+        assert_eq!(plain.protocol[0].criteria(), Criteria::grc07());
     }
 
     #[test]
