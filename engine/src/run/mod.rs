@@ -2,9 +2,10 @@
 //! combination of dimension and law features), then the protocol steps with the equilibrium
 //! criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), blow-up detection and snapshots.
 //!
-//! [`setup`] builds the grains and the system, [`stages`] runs the protocol, [`checks`]
-//! measures equilibrium and detects blow-ups, [`output`] writes snapshots, [`report`] holds
-//! what a run reports, [`checkpoint`] the resumable state on disk.
+//! [`setup`] builds the grains and the system, [`stages`] runs the protocol, [`numerics`]
+//! resolves what each stage reads of the scene, [`checks`] measures equilibrium and detects
+//! blow-ups, [`output`] writes snapshots, [`report`] holds what a run reports, [`options`] how
+//! it is driven, [`checkpoint`] the resumable state on disk.
 
 pub mod checkpoint;
 pub mod checks;
