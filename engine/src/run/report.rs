@@ -107,8 +107,9 @@ pub struct StepReport {
     /// Largest strain rate |L̇_α/L_α| seen at a check of the stage (1/time unit).
     #[serde(default)]
     pub peak_strain_rate: f64,
-    /// What the damped final phase changed, for a stage with `relax` that reached it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// What the damped final phase changed, for a stage with `relax` that reached it (always
+    /// written, `null` otherwise: checkpoint headers are bincode, which cannot skip fields).
+    #[serde(default)]
     pub relaxation: Option<super::relax::Relaxation>,
 }
 
