@@ -90,18 +90,22 @@ pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
     }
 }
 
-/// Equilibrium measures in units of the criteria of the stage.
-pub fn measure<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, num: &StageNumerics) -> Checks {
+/// Equilibrium measures in units of the criteria of the stage, from the state and its
+/// interactions `inter` (`System::interactions`, computed once per check by the caller).
+pub fn measure<D: Dim, L: ContactLaw<D>>(
+    sys: &System<D, L>,
+    num: &StageNumerics,
+    inter: &[system::Interaction<D>],
+) -> Checks {
     let f_ref = num.f_ref;
     let n = sys.len() as f64;
     let (fmax, tmax) = sys.max_unbalanced();
-    let inter = sys.interactions();
     // Kinetic energy: all translations, and the rotations of grains that touch another one. A
     // grain with no contact spinning on itself (a rattler, typically) keeps its spin forever
     // since no force can reach it; it has no bearing on the equilibrium of the packing, so
     // its spin is reported apart (`free_spin_per_grain`) instead of blocking the criterion.
     let mut touching = vec![false; sys.len()];
-    for c in &inter {
+    for c in inter {
         if c.gap < 0.0 {
             touching[c.i] = true;
             touching[c.j] = true;
@@ -152,7 +156,7 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, num: &StageNumerics
             .fold(0.0, f64::max),
         interactions: inter.len(),
         clusters: if num.aggregate {
-            clusters(sys.len(), &inter)
+            clusters(sys.len(), inter)
         } else {
             0
         },

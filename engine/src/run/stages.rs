@@ -17,7 +17,7 @@ use crate::init::maxwell_velocities;
 use crate::protocols::event_driven::HardSpheres;
 use crate::scene::{Scene, Step};
 use crate::snapshot::Snapshot;
-use crate::system::{State, System};
+use crate::system::{Interaction, State, System};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -345,7 +345,8 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     ));
                 }
             }
-            checks = measure(sys, &num);
+            let inter = sys.interactions();
+            checks = measure(sys, &num, &inter);
             if let Some(cb) = opts.progress.as_mut() {
                 cb(&Progress {
                     step_index: k,
@@ -410,7 +411,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             if watch.watching()
                 && watch.observe_structure(
                     sys.time,
-                    &mut pair_list(sys),
+                    &mut pair_list(&inter),
                     checks.kinetic_ratio < 1.0,
                     checks.packing_fraction,
                     &sys.s,
@@ -472,7 +473,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         let relaxation = if watch.damping_on() {
             watch.report(
                 t0,
-                &mut pair_list(sys),
+                &mut pair_list(&sys.interactions()),
                 sys.packing_fraction(),
                 &sys.s,
                 sys.cell.l,
@@ -498,9 +499,9 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
     Ok(false)
 }
 
-/// Interacting pairs (i < j) of the current state.
-fn pair_list<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>) -> Vec<(u32, u32)> {
-    sys.interactions()
+/// Interacting pairs (i < j) of a list of interactions.
+fn pair_list<D: Dim>(inter: &[Interaction<D>]) -> Vec<(u32, u32)> {
+    inter
         .iter()
         .map(|c| (c.i.min(c.j) as u32, c.i.max(c.j) as u32))
         .collect()
