@@ -29,6 +29,9 @@ struct SeedRun {
     steps: serde_json::Value,
     /// Worker threads of the run (results do not depend on it; wall time does).
     threads: usize,
+    /// Contacts at their Coulomb or rolling threshold at the end (GRC07 §II.D: none at
+    /// equilibrium); `None` for summaries written before it was recorded.
+    contacts_at_threshold: Option<usize>,
 }
 
 /// The states `reproduce` knows for `paper`: embedded scenes named `<paper>-<state>` with
@@ -133,6 +136,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             wall_seconds: o.wall_seconds,
             steps: serde_json::to_value(&o.steps)?,
             threads: rayon::current_num_threads(),
+            contacts_at_threshold: Some(o.contacts_at_threshold),
             snapshot: o.snapshot,
         });
     }
@@ -204,6 +208,7 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
         status,
         steps: s["steps"].clone(),
         threads: s["threads"].as_u64().unwrap_or(0) as usize,
+        contacts_at_threshold: s["contacts_at_threshold"].as_u64().map(|c| c as usize),
     }))
 }
 
@@ -268,6 +273,7 @@ fn record(
             "status": r.status,
             "wall_seconds": r.wall_seconds,
             "threads": r.threads,
+            "contacts_at_threshold": r.contacts_at_threshold,
             "stages": r.steps,
             "metrics": v.iter().cloned().collect::<std::collections::BTreeMap<String, f64>>(),
         })).collect::<Vec<_>>(),

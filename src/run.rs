@@ -270,6 +270,12 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                     r.delta_phi,
                     r.max_displacement
                 );
+                if r.free_rollers > 0 {
+                    println!(
+                        "           {} free rollers (one interaction, no rolling resistance) stopped where they were, as GRC07 §III.A stops",
+                        r.free_rollers
+                    );
+                }
             }
         }
     }

@@ -1,5 +1,11 @@
 //! The reduced (CI) versions of the paper states land in the bands of golden/ci-bands.toml,
 //! through the `reproduce` command that makes the paper-size tables.
+//!
+//! A band may carry `known_miss`: a published value the engine is known not to reach, with
+//! the reason. Such a band is checked strictly the other way (the value must stay outside it),
+//! so a change that closes the gap fails here and asks for the mark to go. A scene may also
+//! carry `gold` bands: our own mean ± 3 seed s.d. over recorded seeds (a self test, as
+//! MercuryDPM's), which catch a change of the engine's result where the paper band cannot.
 
 use assert_cmd::Command;
 use grainbench_comparisons::report::paper::paper_values;
@@ -11,6 +17,8 @@ struct Band {
     metric: String,
     lo: f64,
     hi: f64,
+    /// Why the published value is known to be missed (the band must then not hold).
+    known_miss: Option<String>,
 }
 
 /// The bands of one CI scene: paper ± (3 sd √(n_paper/n) + systematic), checked against the
@@ -41,12 +49,29 @@ fn bands(scene: &str) -> (String, Vec<Band>) {
             metric: metric.clone(),
             lo: paper - allowance,
             hi: paper + allowance,
+            known_miss: b.get("known_miss").map(|w| w.as_str().unwrap().to_string()),
         });
+    }
+    // Self-test bands: our mean ± 3 s.d. over the recorded seeds.
+    if let Some(gold) = s.get("gold").and_then(|g| g.as_table()) {
+        for (metric, g) in gold {
+            if metric == "command" {
+                continue;
+            }
+            let (mean, sd) = (g["mean"].as_float().unwrap(), g["sd"].as_float().unwrap());
+            out.push(Band {
+                metric: format!("{metric} (gold)"),
+                lo: mean - 3.0 * sd,
+                hi: mean + 3.0 * sd,
+                known_miss: None,
+            });
+        }
     }
     (state, out)
 }
 
-fn check_ci_scene(scene: &str) {
+/// Runs the CI scene through `reproduce` and checks its bands; returns its summary.
+fn check_ci_scene(scene: &str) -> Value {
     let (_, bands) = bands(scene);
     let name = scene.strip_suffix("-ci").unwrap();
     let (paper, state) = name.split_once('-').unwrap();
@@ -70,22 +95,41 @@ fn check_ci_scene(scene: &str) {
     assert!(dir.path().join("pf.svg").exists() && dir.path().join("gr.png").exists());
     let mut failures = Vec::new();
     for b in &bands {
+        let metric = b.metric.trim_end_matches(" (gold)");
         let row = report["rows"]
             .as_array()
             .unwrap()
             .iter()
-            .find(|r| r["metric"] == b.metric.as_str())
-            .unwrap_or_else(|| panic!("{scene}: no row {}", b.metric));
+            .find(|r| r["metric"] == metric)
+            .unwrap_or_else(|| panic!("{scene}: no row {metric}"));
         let ours = row["ours"]["mean"].as_f64().unwrap();
-        eprintln!("{scene} {}: {ours} in [{}, {}]?", b.metric, b.lo, b.hi);
-        if !(b.lo..=b.hi).contains(&ours) {
-            failures.push(format!(
-                "{} = {ours} outside [{}, {}]",
-                b.metric, b.lo, b.hi
-            ));
+        let inside = (b.lo..=b.hi).contains(&ours);
+        match &b.known_miss {
+            None => {
+                eprintln!("{scene} {}: {ours} in [{}, {}]?", b.metric, b.lo, b.hi);
+                if !inside {
+                    failures.push(format!(
+                        "{} = {ours} outside [{}, {}]",
+                        b.metric, b.lo, b.hi
+                    ));
+                }
+            }
+            Some(why) => {
+                eprintln!(
+                    "{scene} {}: {ours} outside [{}, {}] (known miss: {why})",
+                    b.metric, b.lo, b.hi
+                );
+                if inside {
+                    failures.push(format!(
+                        "{} = {ours} is now inside [{}, {}]: remove its known_miss in golden/ci-bands.toml and say what closed the gap",
+                        b.metric, b.lo, b.hi
+                    ));
+                }
+            }
         }
     }
     assert!(failures.is_empty(), "{scene}: {}", failures.join("; "));
+    summary
 }
 
 #[test]
@@ -101,4 +145,21 @@ fn ar07_d_ci_lands_in_its_bands() {
 #[test]
 fn grc07_cohesionless_ci_lands_in_its_bands() {
     check_ci_scene("grc07-cohesionless-phi036-mu05-ci");
+}
+
+/// GRC07 type 1 with cohesion and RR, N = 400: ends at equilibrium (through the final
+/// relaxation), Φ in its paper band, z a known miss, both in their gold bands.
+#[test]
+fn grc07_cohesive_rr_ci_equilibrates_in_its_bands() {
+    let summary = check_ci_scene("grc07-type1-phi036-mu05-rr-ci");
+    // GRC07 §II.D: at equilibrium the Coulomb and rolling inequalities are strict everywhere.
+    assert_eq!(summary["contacts_at_threshold"], 0, "{summary}");
+    // The relaxation stopped a vibration; it did not build the structure.
+    let r = &summary["steps"][0]["relaxation"];
+    assert_eq!(
+        (&r["pairs_gained"], &r["pairs_lost"]),
+        (&0.into(), &0.into()),
+        "{r}"
+    );
+    assert!(r["delta_phi"].as_f64().unwrap().abs() < 1e-5, "{r}");
 }

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 pub const FORMAT: &str = "grainbench-checkpoint";
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// Where the run stands.
 #[derive(Clone, Debug, Serialize, Deserialize)]

@@ -3,6 +3,7 @@
 
 use super::numerics::StageNumerics;
 use super::output::snapshot_of;
+use super::relax::Settling;
 use super::report::{Checks, RunError};
 use crate::cell::Control;
 use crate::contact::ContactLaw;
@@ -87,6 +88,55 @@ pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
                 Control::Fixed => None,
             },
         )),
+    }
+}
+
+/// What the relaxation's settling test sees at one check. With `free_rollers` (GRC07 §III.A,
+/// no rolling resistance), grains with exactly one interaction roll freely on their partner:
+/// their pairs and their kinetic energy are left out (the energy per grain still divided by
+/// all N, as in the criterion). Without, this is the whole list and the criterion of `checks`.
+pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
+    sys: &System<D, L>,
+    num: &StageNumerics,
+    inter: &[system::Interaction<D>],
+    checks: &Checks,
+    free_rollers: bool,
+) -> Settling {
+    let pair = |c: &system::Interaction<D>| (c.i.min(c.j) as u32, c.i.max(c.j) as u32);
+    if !free_rollers {
+        return Settling {
+            pairs: inter.iter().map(pair).collect(),
+            kinetic_ok: checks.kinetic_ratio < 1.0,
+            rollers: 0,
+        };
+    }
+    let mut degree = vec![0u32; sys.len()];
+    let mut touching = vec![false; sys.len()];
+    for c in inter {
+        degree[c.i] += 1;
+        degree[c.j] += 1;
+        if c.gap < 0.0 {
+            touching[c.i] = true;
+            touching[c.j] = true;
+        }
+    }
+    let roller = |i: usize| degree[i] == 1;
+    let pairs = inter
+        .iter()
+        .filter(|c| !roller(c.i) && !roller(c.j))
+        .map(pair)
+        .collect();
+    let mut ke = 0.0;
+    for i in (0..sys.len()).filter(|&i| !roller(i)) {
+        ke += 0.5 * sys.mass[i] * sys.u[i].norm_squared();
+        if L::MOMENTS && touching[i] {
+            ke += 0.5 * sys.w[i].norm_squared() / sys.inv_inertia[i];
+        }
+    }
+    Settling {
+        pairs,
+        kinetic_ok: ke / sys.len() as f64 / (num.kinetic * num.f_ref) < 1.0,
+        rollers: degree.iter().filter(|&&d| d == 1).count(),
     }
 }
 

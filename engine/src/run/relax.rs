@@ -31,6 +31,10 @@ pub struct Relaxation {
     /// Largest displacement of a grain centre relative to the cell since the switch (nearest
     /// image of the reduced displacement, scaled by the cell lengths at the end), in a.
     pub max_displacement: f64,
+    /// Free rollers (one-interaction grains, `relax.free_rollers`) left out of the settling
+    /// test and stopped by the damping where they were (0 without `free_rollers`).
+    #[serde(default)]
+    pub free_rollers: usize,
 }
 
 /// The state at the switch, kept to measure what the damped phase changes.
@@ -38,6 +42,7 @@ pub struct Relaxation {
 #[serde(bound = "")]
 struct Switch<D: Dim> {
     time: f64,
+    rollers: usize,
     pairs: Vec<(u32, u32)>,
     phi: f64,
     s: Vec<D::V>,
@@ -77,6 +82,11 @@ impl<D: Dim> StageWatch<D> {
         self.relax.is_some() && self.switch.is_none()
     }
 
+    /// Whether the settling test leaves free rollers out (GRC07 §III.A, `relax.free_rollers`).
+    pub fn free_rollers(&self) -> bool {
+        self.relax.is_some_and(|r| r.free_rollers)
+    }
+
     /// Whether the damped phase is on.
     pub fn damping_on(&self) -> bool {
         self.switch.is_some()
@@ -98,32 +108,40 @@ impl<D: Dim> StageWatch<D> {
         }
     }
 
-    /// Looks at one check: the interaction list `pairs` (i < j, any order), whether the
-    /// kinetic criterion holds, Φ and the reduced positions. Returns true when the damped
-    /// phase starts at this check.
+    /// Looks at one check: the settling view (`settled`: the interaction list and whether the
+    /// kinetic criterion holds, both without the `rollers` free rollers when they are left
+    /// out), the whole interaction list `pairs` (i < j, any order), Φ and the reduced
+    /// positions. Returns true when the damped phase starts at this check.
     pub fn observe_structure(
         &mut self,
         time: f64,
+        settled: Settling,
         pairs: &mut [(u32, u32)],
-        kinetic_ok: bool,
         phi: f64,
         s: &[D::V],
     ) -> bool {
+        let Settling {
+            pairs: mut settle_pairs,
+            kinetic_ok,
+            rollers,
+        } = settled;
         let Some(relax) = self.relax else {
             return false;
         };
         if self.switch.is_some() {
             return false;
         }
-        pairs.sort_unstable();
-        let hash = fnv1a(pairs);
+        settle_pairs.sort_unstable();
+        let hash = fnv1a(&settle_pairs);
         if hash != self.pairs_hash {
             self.pairs_hash = hash;
             self.unchanged_since = time;
         }
         if kinetic_ok && time - self.unchanged_since >= relax.settle_time {
+            pairs.sort_unstable();
             self.switch = Some(Switch {
                 time,
+                rollers,
                 pairs: pairs.to_vec(),
                 phi,
                 s: s.to_vec(),
@@ -178,8 +196,19 @@ impl<D: Dim> StageWatch<D> {
             pairs_lost: sw.pairs.len() - common,
             delta_phi: phi - sw.phi,
             max_displacement,
+            free_rollers: sw.rollers,
         })
     }
+}
+
+/// What the settling test looks at, at one check ([`StageWatch::observe_structure`]).
+pub struct Settling {
+    /// Interacting pairs (i < j, any order), free rollers' pairs left out when asked.
+    pub pairs: Vec<(u32, u32)>,
+    /// Whether the kinetic criterion holds (free rollers' energy left out when asked).
+    pub kinetic_ok: bool,
+    /// Free rollers left out (0 without `relax.free_rollers`).
+    pub rollers: usize,
 }
 
 /// Pairs present in both sorted lists.
@@ -218,11 +247,20 @@ mod tests {
     use crate::geometry::D2;
     use nalgebra::Vector2;
 
+    fn settling(pairs: &[(u32, u32)], kinetic_ok: bool) -> Settling {
+        Settling {
+            pairs: pairs.to_vec(),
+            kinetic_ok,
+            rollers: 0,
+        }
+    }
+
     fn relax() -> Relax {
         Relax {
             damping: 1.0,
             tangential_zeta: 0.0,
             settle_time: 2.0,
+            free_rollers: false,
         }
     }
 
@@ -230,26 +268,83 @@ mod tests {
     fn switches_on_after_the_list_settles_with_low_kinetic_energy() {
         let s = vec![Vector2::new(0.1, 0.2), Vector2::new(0.5, 0.5)];
         let mut st = StageWatch::<D2>::new(Some(relax()), 0.0);
-        assert!(!st.observe_structure(0.0, &mut [(0, 1)], true, 0.5, &s));
+        assert!(!st.observe_structure(0.0, settling(&[(0, 1)], true), &mut [(0, 1)], 0.5, &s));
         // The list changes at t = 1: the clock restarts.
-        assert!(!st.observe_structure(1.0, &mut [(0, 1), (1, 2)], true, 0.5, &s));
-        assert!(!st.observe_structure(2.5, &mut [(1, 2), (0, 1)], true, 0.5, &s));
+        assert!(!st.observe_structure(
+            1.0,
+            settling(&[(0, 1), (1, 2)], true),
+            &mut [(0, 1), (1, 2)],
+            0.5,
+            &s
+        ));
+        assert!(!st.observe_structure(
+            2.5,
+            settling(&[(1, 2), (0, 1)], true),
+            &mut [(1, 2), (0, 1)],
+            0.5,
+            &s
+        ));
         // Settled for 2, but kinetic energy too high.
-        assert!(!st.observe_structure(3.0, &mut [(0, 1), (1, 2)], false, 0.5, &s));
+        assert!(!st.observe_structure(
+            3.0,
+            settling(&[(0, 1), (1, 2)], false),
+            &mut [(0, 1), (1, 2)],
+            0.5,
+            &s
+        ));
         assert!(st.damping_factor(0.1).is_none());
-        assert!(st.observe_structure(3.1, &mut [(0, 1), (1, 2)], true, 0.5, &s));
+        assert!(st.observe_structure(
+            3.1,
+            settling(&[(0, 1), (1, 2)], true),
+            &mut [(0, 1), (1, 2)],
+            0.5,
+            &s
+        ));
         assert!(st.damping_on());
         assert!((st.damping_factor(0.1).unwrap() - (-0.1f64).exp()).abs() < 1e-15);
         // Once on, it stays on.
-        assert!(!st.observe_structure(4.0, &mut [(0, 1)], true, 0.5, &s));
+        assert!(!st.observe_structure(4.0, settling(&[(0, 1)], true), &mut [(0, 1)], 0.5, &s));
         assert!(st.damping_on());
+    }
+
+    #[test]
+    fn free_rollers_are_left_out_of_the_clock_but_not_out_of_the_report() {
+        let s = vec![Vector2::new(0.1, 0.2), Vector2::new(0.5, 0.5)];
+        let mut st = StageWatch::<D2>::new(
+            Some(Relax {
+                free_rollers: true,
+                ..relax()
+            }),
+            0.0,
+        );
+        assert!(st.free_rollers());
+        // Grain 3 rolls from partner 2 to partner 1: the whole list changes, the settling
+        // view (its pairs left out) does not, so the clock runs on.
+        let view = || Settling {
+            pairs: vec![(0, 1), (1, 2)],
+            kinetic_ok: true,
+            rollers: 1,
+        };
+        assert!(!st.observe_structure(0.0, view(), &mut [(0, 1), (1, 2), (2, 3)], 0.5, &s));
+        assert!(st.observe_structure(2.0, view(), &mut [(0, 1), (1, 2), (1, 3)], 0.5, &s));
+        let r = st
+            .report(
+                0.0,
+                &mut [(1, 3), (0, 1), (1, 2)],
+                0.5,
+                &s,
+                Vector2::new(1.0, 1.0),
+            )
+            .unwrap();
+        assert_eq!((r.pairs, r.pairs_gained, r.pairs_lost), (3, 0, 0));
+        assert_eq!(r.free_rollers, 1);
     }
 
     #[test]
     fn without_relax_nothing_switches() {
         let s = vec![Vector2::new(0.1, 0.2)];
         let mut st = StageWatch::<D2>::new(None, 0.0);
-        assert!(!st.observe_structure(100.0, &mut [], true, 0.5, &s));
+        assert!(!st.observe_structure(100.0, settling(&[], true), &mut [], 0.5, &s));
         assert!(st.damping_factor(0.1).is_none());
         assert!(st
             .report(0.0, &mut [], 0.5, &s, Vector2::new(1.0, 1.0))
@@ -276,8 +371,20 @@ mod tests {
     fn report_counts_pairs_and_the_periodic_displacement() {
         let s0 = vec![Vector2::new(0.99, 0.5), Vector2::new(0.5, 0.5)];
         let mut st = StageWatch::<D2>::new(Some(relax()), 10.0);
-        st.observe_structure(10.0, &mut [(0, 1), (1, 2)], true, 0.6, &s0);
-        st.observe_structure(12.0, &mut [(0, 1), (1, 2)], true, 0.6, &s0);
+        st.observe_structure(
+            10.0,
+            settling(&[(0, 1), (1, 2)], true),
+            &mut [(0, 1), (1, 2)],
+            0.6,
+            &s0,
+        );
+        st.observe_structure(
+            12.0,
+            settling(&[(0, 1), (1, 2)], true),
+            &mut [(0, 1), (1, 2)],
+            0.6,
+            &s0,
+        );
         assert!(st.damping_on());
         // Grain 0 crosses the boundary: 0.99 → 0.01 is a displacement of 0.02 cell lengths.
         let s1 = vec![Vector2::new(0.01, 0.5), Vector2::new(0.5, 0.5)];

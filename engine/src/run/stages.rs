@@ -2,7 +2,7 @@
 //! hard-grain stages (expansion, event-driven mixing, growth).
 
 use super::checkpoint::{self, Checkpoint, Header};
-use super::checks::{contacts_at_threshold, measure, step_correlation, unstable};
+use super::checks::{contacts_at_threshold, measure, settle_view, step_correlation, unstable};
 use super::checks::{FLIP_CHECKS, FLIP_CORRELATION};
 use super::numerics::StageNumerics;
 use super::options::{CheckpointSpec, RunOptions};
@@ -408,15 +408,15 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 ));
             }
             sys.save(&mut last_good);
-            if watch.watching()
+            let observed = watch.watching()
                 && watch.observe_structure(
                     sys.time,
+                    settle_view(sys, &num, &inter, &checks, watch.free_rollers()),
                     &mut pair_list(&inter),
-                    checks.kinetic_ratio < 1.0,
                     checks.packing_fraction,
                     &sys.s,
-                )
-            {
+                );
+            if observed {
                 if let Some(z) = watch.tangential_zeta() {
                     sys.law = sys.law.with_tangential_damping(z);
                 }

@@ -473,6 +473,14 @@ pub struct Relax {
     pub tangential_zeta: f64,
     /// Time the interaction list must stay unchanged before the damping starts.
     pub settle_time: f64,
+    /// GRC07 §III.A stopping rule without rolling resistance: a grain with one interaction
+    /// rolls freely on its partner (nothing damps that motion) and the paper stops "when the
+    /// kinetic energy is below a set tolerance", not waiting "until all freely rolling disks
+    /// reach their final position". With `free_rollers` the settling test leaves such grains
+    /// out (their pairs and their kinetic energy); the damping then stops them where they are.
+    /// Needs a cohesive law without rolling resistance.
+    #[serde(default)]
+    pub free_rollers: bool,
 }
 
 /// Equilibrium criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), in units of a force scale

@@ -358,6 +358,13 @@ impl Scene {
                     positive(&f("relax.damping"), r.damping)?;
                     in_range(&f("relax.settle_time"), r.settle_time, 0.0, step.max_time())?;
                     in_range(&f("relax.tangential_zeta"), r.tangential_zeta, 0.0, 1.0)?;
+                    let no_rr = matches!(self.law, Law::Linear { rolling: None, .. });
+                    if r.free_rollers && !(cohesive && no_rr) {
+                        return Err(err(
+                            &f("relax.free_rollers"),
+                            "free rollers (GRC07 §III.A) are one-contact grains of a cohesive law without rolling resistance; remove it, or use law.cohesion without law.rolling".into(),
+                        ));
+                    }
                     if r.tangential_zeta > 0.0 && !matches!(self.law, Law::Linear { .. }) {
                         return Err(err(
                             &f("relax.tangential_zeta"),
@@ -437,6 +444,18 @@ mod tests {
             "relax = { damping = 1.0, tangential_zeta = 2.0, settle_time = 1.0 }",
         ));
         assert_eq!(e.field, "protocol[0].relax.tangential_zeta", "{e}");
+        // Free rollers (GRC07 §III.A) exist only without rolling resistance.
+        let rollers = "relax = { damping = 1.0, settle_time = 10.0, free_rollers = true }";
+        let e = err(&BASE.replace(relax, rollers));
+        assert_eq!(e.field, "protocol[0].relax.free_rollers", "{e}");
+        assert!(e.message.contains("law.rolling"), "{e}");
+        let no_rr = BASE
+            .lines()
+            .filter(|l| !l.starts_with("rolling"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let s = Scene::from_toml(&no_rr.replace(relax, rollers), Path::new("s.toml")).unwrap();
+        assert!(s.protocol[0].relax().unwrap().free_rollers);
         let e = err(&BASE.replace(relax, "relax = { damping = 1.0, settle = 1.0 }"));
         assert!(e.message.contains("settle"), "{e}");
         let e = err(&BASE.replace("window = 2.0", "window = -1.0"));
