@@ -308,6 +308,43 @@ fn cohesive_2d_packing_relaxes_to_grc07_criteria_and_resumes_bit_identical() {
     );
 }
 
+/// A slow compression (a heavy cell: M = 4.2 Σm for 100 grains compresses at the rate of
+/// GRC07 (3) with M = 3/10 Σm for 1400) leaves the gas at rest with an unchanged, nearly empty
+/// interaction list for longer than `settle_time`: the relaxation must not take that for a
+/// settled packing (before it waited for the stress criterion too, it switched on at t = 20
+/// with 2 pairs and damped the whole assembly). It starts on the built packing and changes no
+/// pair.
+#[test]
+fn relaxation_waits_for_the_packing_not_for_a_gas_at_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = grainbench_engine::library::scene_text("grc07-cohesive-small")
+        .unwrap()
+        .replace("count = 400", "count = 100")
+        .replace("cell_mass = 0.3", "cell_mass = 4.2")
+        .replace(
+            "cell_mass_per_length = true",
+            "cell_mass_per_length = false",
+        );
+    let scene = scene_file(dir.path(), "slow.toml", &text);
+    let out = dir.path().join("out");
+    grainbench()
+        .arg("run")
+        .arg(&scene)
+        .args(["-q", "-j", "2", "--require-equilibrium", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let r = &summary["steps"][0]["relaxation"];
+    assert!(
+        r["pairs"].as_u64().unwrap() >= 100,
+        "switched on a gas: {r}"
+    );
+    assert_eq!(r["pairs_gained"], 0, "{r}");
+    assert!(f(r, &["start_time"]) > 50.0, "{r}");
+}
+
 /// A frictional run long enough to be interrupted; the hard-sphere stage exercises the
 /// checkpoint taken at a stage start.
 const RESUMABLE: &str = r#"

@@ -91,10 +91,13 @@ pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
     }
 }
 
-/// What the relaxation's settling test sees at one check. With `free_rollers` (GRC07 §III.A,
-/// no rolling resistance), grains with exactly one interaction roll freely on their partner:
-/// their pairs and their kinetic energy are left out (the energy per grain still divided by
-/// all N, as in the criterion). Without, this is the whole list and the criterion of `checks`.
+/// What the relaxation's settling test sees at one check: the interaction list, and whether
+/// the assembly is at rest — the kinetic criterion and, under stress control, the stress
+/// criterion hold (a gas at rest before a slow compression has an unchanged, empty list: it
+/// must not be taken for a settled packing). With `free_rollers` (GRC07 §III.A, no rolling
+/// resistance), grains with exactly one interaction roll freely on their partner: their pairs
+/// and their kinetic energy are left out (the energy per grain still divided by all N, as in
+/// the criterion).
 pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
     num: &StageNumerics,
@@ -106,7 +109,7 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     if !free_rollers {
         return Settling {
             pairs: inter.iter().map(pair).collect(),
-            kinetic_ok: checks.kinetic_ratio < 1.0,
+            at_rest: checks.kinetic_ratio < 1.0 && checks.stress_ratio < 1.0,
             rollers: 0,
         };
     }
@@ -135,7 +138,8 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     }
     Settling {
         pairs,
-        kinetic_ok: ke / sys.len() as f64 / (num.kinetic * num.f_ref) < 1.0,
+        at_rest: ke / sys.len() as f64 / (num.kinetic * num.f_ref) < 1.0
+            && checks.stress_ratio < 1.0,
         rollers: degree.iter().filter(|&&d| d == 1).count(),
     }
 }

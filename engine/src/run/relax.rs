@@ -5,7 +5,7 @@
 //! normal gap at first order at h0 = F0/K_N) keep vibrating with e-folding times of 10³–10⁵ T0
 //! after the structure has stopped changing: the net-force criterion of GRC07 §II.D is never
 //! met. A stage with `relax` runs GRC07's law exactly until the interaction list has been
-//! unchanged for `settle_time` with the kinetic criterion met, then switches on background
+//! unchanged for `settle_time` with the kinetic and stress criteria met, then switches on background
 //! damping of the peculiar velocities and spins (and, optionally, tangential and rolling
 //! dashpots) until the criteria hold over a window. [`Relaxation`] reports what the damped
 //! phase changed: pairs gained and lost, ΔΦ and the largest grain displacement.
@@ -109,7 +109,7 @@ impl<D: Dim> StageWatch<D> {
     }
 
     /// Looks at one check: the settling view (`settled`: the interaction list and whether the
-    /// kinetic criterion holds, both without the `rollers` free rollers when they are left
+    /// assembly is at rest, both without the `rollers` free rollers when they are left
     /// out), the whole interaction list `pairs` (i < j, any order), Φ and the reduced
     /// positions. Returns true when the damped phase starts at this check.
     pub fn observe_structure(
@@ -122,7 +122,7 @@ impl<D: Dim> StageWatch<D> {
     ) -> bool {
         let Settling {
             pairs: mut settle_pairs,
-            kinetic_ok,
+            at_rest,
             rollers,
         } = settled;
         let Some(relax) = self.relax else {
@@ -137,7 +137,7 @@ impl<D: Dim> StageWatch<D> {
             self.pairs_hash = hash;
             self.unchanged_since = time;
         }
-        if kinetic_ok && time - self.unchanged_since >= relax.settle_time {
+        if at_rest && time - self.unchanged_since >= relax.settle_time {
             pairs.sort_unstable();
             self.switch = Some(Switch {
                 time,
@@ -205,8 +205,9 @@ impl<D: Dim> StageWatch<D> {
 pub struct Settling {
     /// Interacting pairs (i < j, any order), free rollers' pairs left out when asked.
     pub pairs: Vec<(u32, u32)>,
-    /// Whether the kinetic criterion holds (free rollers' energy left out when asked).
-    pub kinetic_ok: bool,
+    /// Whether the kinetic criterion (free rollers' energy left out when asked) and, under
+    /// stress control, the stress criterion hold.
+    pub at_rest: bool,
     /// Free rollers left out (0 without `relax.free_rollers`).
     pub rollers: usize,
 }
@@ -247,10 +248,10 @@ mod tests {
     use crate::geometry::D2;
     use nalgebra::Vector2;
 
-    fn settling(pairs: &[(u32, u32)], kinetic_ok: bool) -> Settling {
+    fn settling(pairs: &[(u32, u32)], at_rest: bool) -> Settling {
         Settling {
             pairs: pairs.to_vec(),
-            kinetic_ok,
+            at_rest,
             rollers: 0,
         }
     }
@@ -322,7 +323,7 @@ mod tests {
         // view (its pairs left out) does not, so the clock runs on.
         let view = || Settling {
             pairs: vec![(0, 1), (1, 2)],
-            kinetic_ok: true,
+            at_rest: true,
             rollers: 1,
         };
         assert!(!st.observe_structure(0.0, view(), &mut [(0, 1), (1, 2), (2, 3)], 0.5, &s));

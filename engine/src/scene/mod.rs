@@ -457,7 +457,7 @@ impl Step {
 }
 
 /// Final relaxation of a DEM stage (issue 12; engine/src/relax.rs): once the interaction list
-/// has been unchanged for `settle_time` with the kinetic criterion met, the peculiar velocities
+/// has been unchanged for `settle_time` with the kinetic and stress criteria met, the peculiar velocities
 /// and spins are damped at rate `damping` (v ← v e^{−γ dt} each step) and, when
 /// `tangential_zeta` > 0, tangential and rolling dashpots of that fraction of critical act in
 /// the contacts, until the criteria hold. Before the switch the law is the paper's, exactly.
