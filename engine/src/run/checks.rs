@@ -105,43 +105,63 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     checks: &Checks,
     free_rollers: bool,
 ) -> Settling {
-    let pair = |c: &system::Interaction<D>| (c.i.min(c.j) as u32, c.i.max(c.j) as u32);
     if !free_rollers {
         return Settling {
-            pairs: inter.iter().map(pair).collect(),
+            pairs: None,
             at_rest: checks.kinetic_ratio < 1.0 && checks.stress_ratio < 1.0,
             rollers: 0,
         };
     }
+    let touching = touching(sys.len(), inter);
     let mut degree = vec![0u32; sys.len()];
-    let mut touching = vec![false; sys.len()];
     for c in inter {
         degree[c.i] += 1;
         degree[c.j] += 1;
-        if c.gap < 0.0 {
-            touching[c.i] = true;
-            touching[c.j] = true;
-        }
     }
     let roller = |i: usize| degree[i] == 1;
     let pairs = inter
         .iter()
         .filter(|c| !roller(c.i) && !roller(c.j))
-        .map(pair)
+        .map(|c| (c.i.min(c.j) as u32, c.i.max(c.j) as u32))
         .collect();
-    let mut ke = 0.0;
-    for i in (0..sys.len()).filter(|&i| !roller(i)) {
-        ke += 0.5 * sys.mass[i] * sys.u[i].norm_squared();
-        if L::MOMENTS && touching[i] {
-            ke += 0.5 * sys.w[i].norm_squared() / sys.inv_inertia[i];
-        }
-    }
+    let ke: f64 = (0..sys.len())
+        .filter(|&i| !roller(i))
+        .map(|i| {
+            let (t, r) = kinetic_parts(sys, i);
+            if touching[i] {
+                t + r
+            } else {
+                t
+            }
+        })
+        .sum();
     Settling {
-        pairs,
+        pairs: Some(pairs),
         at_rest: ke / sys.len() as f64 / (num.kinetic * num.f_ref) < 1.0
             && checks.stress_ratio < 1.0,
         rollers: degree.iter().filter(|&&d| d == 1).count(),
     }
+}
+
+/// Grains in contact with another one (gap < 0; a distant attraction does not count).
+fn touching<D: Dim>(n: usize, inter: &[system::Interaction<D>]) -> Vec<bool> {
+    let mut touching = vec![false; n];
+    for c in inter.iter().filter(|c| c.gap < 0.0) {
+        touching[c.i] = true;
+        touching[c.j] = true;
+    }
+    touching
+}
+
+/// Translational and rotational kinetic energy of grain `i` (rotation 0 without moments).
+fn kinetic_parts<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, i: usize) -> (f64, f64) {
+    let t = 0.5 * sys.mass[i] * sys.u[i].norm_squared();
+    let r = if L::MOMENTS {
+        0.5 * sys.w[i].norm_squared() / sys.inv_inertia[i]
+    } else {
+        0.0
+    };
+    (t, r)
 }
 
 /// Equilibrium measures in units of the criteria of the stage, from the state and its
@@ -158,25 +178,17 @@ pub fn measure<D: Dim, L: ContactLaw<D>>(
     // grain with no contact spinning on itself (a rattler, typically) keeps its spin forever
     // since no force can reach it; it has no bearing on the equilibrium of the packing, so
     // its spin is reported apart (`free_spin_per_grain`) instead of blocking the criterion.
-    let mut touching = vec![false; sys.len()];
-    for c in inter {
-        if c.gap < 0.0 {
-            touching[c.i] = true;
-            touching[c.j] = true;
-        }
-    }
+    let touching = touching(sys.len(), inter);
     let mut ke_t = 0.0;
     let mut ke_r = 0.0;
     let mut ke_free = 0.0;
     for (i, &touch) in touching.iter().enumerate() {
-        ke_t += 0.5 * sys.mass[i] * sys.u[i].norm_squared();
-        if L::MOMENTS {
-            let e = 0.5 * sys.w[i].norm_squared() / sys.inv_inertia[i];
-            if touch {
-                ke_r += e;
-            } else {
-                ke_free += e;
-            }
+        let (t, r) = kinetic_parts(sys, i);
+        ke_t += t;
+        if touch {
+            ke_r += r;
+        } else {
+            ke_free += r;
         }
     }
     let ke = (ke_t + ke_r) / n;

@@ -108,10 +108,10 @@ impl<D: Dim> StageWatch<D> {
         }
     }
 
-    /// Looks at one check: the settling view (`settled`: the interaction list and whether the
-    /// assembly is at rest, both without the `rollers` free rollers when they are left
-    /// out), the whole interaction list `pairs` (i < j, any order), Φ and the reduced
-    /// positions. Returns true when the damped phase starts at this check.
+    /// Looks at one check: the settling view (`settled`: whether the assembly is at rest and,
+    /// when free rollers are left out, the list without them), the whole interaction list
+    /// `pairs` (i < j, any order), Φ and the reduced positions. Returns true when the damped
+    /// phase starts at this check.
     pub fn observe_structure(
         &mut self,
         time: f64,
@@ -120,19 +120,27 @@ impl<D: Dim> StageWatch<D> {
         phi: f64,
         s: &[D::V],
     ) -> bool {
-        let Settling {
-            pairs: mut settle_pairs,
-            at_rest,
-            rollers,
-        } = settled;
         let Some(relax) = self.relax else {
             return false;
         };
         if self.switch.is_some() {
             return false;
         }
-        settle_pairs.sort_unstable();
-        let hash = fnv1a(&settle_pairs);
+        let Settling {
+            pairs: settle_pairs,
+            at_rest,
+            rollers,
+        } = settled;
+        let hash = match settle_pairs {
+            Some(mut p) => {
+                p.sort_unstable();
+                fnv1a(&p)
+            }
+            None => {
+                pairs.sort_unstable();
+                fnv1a(pairs)
+            }
+        };
         if hash != self.pairs_hash {
             self.pairs_hash = hash;
             self.unchanged_since = time;
@@ -203,8 +211,9 @@ impl<D: Dim> StageWatch<D> {
 
 /// What the settling test looks at, at one check ([`StageWatch::observe_structure`]).
 pub struct Settling {
-    /// Interacting pairs (i < j, any order), free rollers' pairs left out when asked.
-    pub pairs: Vec<(u32, u32)>,
+    /// Interacting pairs (i < j, any order) without the free rollers' when they are left
+    /// out; `None`: the whole list.
+    pub pairs: Option<Vec<(u32, u32)>>,
     /// Whether the kinetic criterion (free rollers' energy left out when asked) and, under
     /// stress control, the stress criterion hold.
     pub at_rest: bool,
@@ -248,9 +257,9 @@ mod tests {
     use crate::geometry::D2;
     use nalgebra::Vector2;
 
-    fn settling(pairs: &[(u32, u32)], at_rest: bool) -> Settling {
+    fn settling(at_rest: bool) -> Settling {
         Settling {
-            pairs: pairs.to_vec(),
+            pairs: None,
             at_rest,
             rollers: 0,
         }
@@ -269,42 +278,18 @@ mod tests {
     fn switches_on_after_the_list_settles_with_low_kinetic_energy() {
         let s = vec![Vector2::new(0.1, 0.2), Vector2::new(0.5, 0.5)];
         let mut st = StageWatch::<D2>::new(Some(relax()), 0.0);
-        assert!(!st.observe_structure(0.0, settling(&[(0, 1)], true), &mut [(0, 1)], 0.5, &s));
+        assert!(!st.observe_structure(0.0, settling(true), &mut [(0, 1)], 0.5, &s));
         // The list changes at t = 1: the clock restarts.
-        assert!(!st.observe_structure(
-            1.0,
-            settling(&[(0, 1), (1, 2)], true),
-            &mut [(0, 1), (1, 2)],
-            0.5,
-            &s
-        ));
-        assert!(!st.observe_structure(
-            2.5,
-            settling(&[(1, 2), (0, 1)], true),
-            &mut [(1, 2), (0, 1)],
-            0.5,
-            &s
-        ));
+        assert!(!st.observe_structure(1.0, settling(true), &mut [(0, 1), (1, 2)], 0.5, &s));
+        assert!(!st.observe_structure(2.5, settling(true), &mut [(1, 2), (0, 1)], 0.5, &s));
         // Settled for 2, but kinetic energy too high.
-        assert!(!st.observe_structure(
-            3.0,
-            settling(&[(0, 1), (1, 2)], false),
-            &mut [(0, 1), (1, 2)],
-            0.5,
-            &s
-        ));
+        assert!(!st.observe_structure(3.0, settling(false), &mut [(0, 1), (1, 2)], 0.5, &s));
         assert!(st.damping_factor(0.1).is_none());
-        assert!(st.observe_structure(
-            3.1,
-            settling(&[(0, 1), (1, 2)], true),
-            &mut [(0, 1), (1, 2)],
-            0.5,
-            &s
-        ));
+        assert!(st.observe_structure(3.1, settling(true), &mut [(0, 1), (1, 2)], 0.5, &s));
         assert!(st.damping_on());
         assert!((st.damping_factor(0.1).unwrap() - (-0.1f64).exp()).abs() < 1e-15);
         // Once on, it stays on.
-        assert!(!st.observe_structure(4.0, settling(&[(0, 1)], true), &mut [(0, 1)], 0.5, &s));
+        assert!(!st.observe_structure(4.0, settling(true), &mut [(0, 1)], 0.5, &s));
         assert!(st.damping_on());
     }
 
@@ -322,7 +307,7 @@ mod tests {
         // Grain 3 rolls from partner 2 to partner 1: the whole list changes, the settling
         // view (its pairs left out) does not, so the clock runs on.
         let view = || Settling {
-            pairs: vec![(0, 1), (1, 2)],
+            pairs: Some(vec![(0, 1), (1, 2)]),
             at_rest: true,
             rollers: 1,
         };
@@ -345,7 +330,7 @@ mod tests {
     fn without_relax_nothing_switches() {
         let s = vec![Vector2::new(0.1, 0.2)];
         let mut st = StageWatch::<D2>::new(None, 0.0);
-        assert!(!st.observe_structure(100.0, settling(&[], true), &mut [], 0.5, &s));
+        assert!(!st.observe_structure(100.0, settling(true), &mut [], 0.5, &s));
         assert!(st.damping_factor(0.1).is_none());
         assert!(st
             .report(0.0, &mut [], 0.5, &s, Vector2::new(1.0, 1.0))
@@ -372,20 +357,8 @@ mod tests {
     fn report_counts_pairs_and_the_periodic_displacement() {
         let s0 = vec![Vector2::new(0.99, 0.5), Vector2::new(0.5, 0.5)];
         let mut st = StageWatch::<D2>::new(Some(relax()), 10.0);
-        st.observe_structure(
-            10.0,
-            settling(&[(0, 1), (1, 2)], true),
-            &mut [(0, 1), (1, 2)],
-            0.6,
-            &s0,
-        );
-        st.observe_structure(
-            12.0,
-            settling(&[(0, 1), (1, 2)], true),
-            &mut [(0, 1), (1, 2)],
-            0.6,
-            &s0,
-        );
+        st.observe_structure(10.0, settling(true), &mut [(0, 1), (1, 2)], 0.6, &s0);
+        st.observe_structure(12.0, settling(true), &mut [(0, 1), (1, 2)], 0.6, &s0);
         assert!(st.damping_on());
         // Grain 0 crosses the boundary: 0.99 → 0.01 is a displacement of 0.02 cell lengths.
         let s1 = vec![Vector2::new(0.01, 0.5), Vector2::new(0.5, 0.5)];
