@@ -170,7 +170,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         println!("plot       {}", p.display());
     }
     if a.record {
-        let path = record(a, &scene_name, &state_key, &runs, &values, &table)?;
+        let path = record(a, &scene_name, &base, &state_key, &runs, &values, &table)?;
         println!("recorded   {}", path.display());
         // The table and the vector plots go beside the record, for reading on the web.
         for f in ["report.md", "pf.svg", "gr.svg"] {
@@ -246,9 +246,12 @@ pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) 
 }
 
 /// Writes golden/<scene>/rust.json: what was run, how long it took, and every metric per seed.
+/// golden/<scene>/rust.json: the command, the scene as run (`settings`, seed aside, with
+/// `--max-time` applied), and each seed's status, stages and metrics.
 fn record(
     a: &Args,
     scene_name: &str,
+    scene: &grainbench_engine::Scene,
     state_key: &str,
     runs: &[SeedRun],
     values: &[Vec<(String, f64)>],
@@ -268,6 +271,8 @@ fn record(
             runs.first().map_or(rayon::current_num_threads(), |r| r.threads)
         ),
         "n": runs.first().map(|r| r.snapshot.particles.radius.len()),
+        "max_time": a.max_time,
+        "settings": scene,
         "seeds": runs.iter().zip(values).map(|(r, v)| serde_json::json!({
             "seed": r.seed,
             "status": r.status,

@@ -148,7 +148,7 @@ fn grc07_cohesionless_ci_lands_in_its_bands() {
 }
 
 /// GRC07 type 1 with cohesion and RR, N = 400: ends at equilibrium (through the final
-/// relaxation), Φ in its paper band, z a known miss, both in their gold bands.
+/// relaxation), Φ and z in their paper bands and in their gold bands.
 #[test]
 fn grc07_cohesive_rr_ci_equilibrates_in_its_bands() {
     let summary = check_ci_scene("grc07-type1-phi036-mu05-rr-ci");
@@ -162,4 +162,48 @@ fn grc07_cohesive_rr_ci_equilibrates_in_its_bands() {
         "{r}"
     );
     assert!(r["delta_phi"].as_f64().unwrap().abs() < 1e-5, "{r}");
+}
+
+/// Every golden record that carries the scene it ran (`settings`, written by `reproduce
+/// --record`) was made with the embedded scene as it is now: a scene edited after its record
+/// fails here until the state is recorded again. Records written before `settings` existed
+/// are listed, not checked.
+#[test]
+fn golden_records_were_made_with_the_scenes_as_they_are() {
+    use grainbench_engine::{library, Scene};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("golden");
+    let (mut checked, mut stale, mut without) = (0, Vec::new(), Vec::new());
+    for entry in std::fs::read_dir(&root).unwrap() {
+        let dir = entry.unwrap().path();
+        let file = dir.join("rust.json");
+        let Ok(bytes) = std::fs::read(&file) else {
+            continue;
+        };
+        let doc: Value = serde_json::from_slice(&bytes).unwrap();
+        let name = doc["scene"].as_str().unwrap();
+        let Some(settings) = doc.get("settings") else {
+            without.push(name.to_string());
+            continue;
+        };
+        let recorded: Scene = serde_json::from_value(settings.clone())
+            .unwrap_or_else(|e| panic!("{}: settings: {e}", file.display()));
+        let text = library::scene_text(name)
+            .unwrap_or_else(|| panic!("{}: no embedded scene {name}", file.display()));
+        let mut now =
+            Scene::from_toml(text, std::path::Path::new(&format!("<embedded:{name}>"))).unwrap();
+        now.seed = recorded.seed;
+        if let Some(t) = doc["max_time"].as_f64() {
+            now.cap_max_time(t);
+        }
+        checked += 1;
+        if now != recorded {
+            stale.push(format!("{name} (`{}`)", doc["command"].as_str().unwrap()));
+        }
+    }
+    eprintln!("{checked} records checked; without settings (older): {without:?}");
+    assert!(
+        stale.is_empty(),
+        "records made with another version of their scene, to record again: {}",
+        stale.join(", ")
+    );
 }
