@@ -52,8 +52,8 @@ pub fn prepare(start: &Start, code: Code, r: &mut CodeResult) -> Option<(PathBuf
     let Some(binary) = code.find() else {
         r.outcome = Outcome::Missing;
         r.message = Some(format!(
-            "`{}` not found on PATH; install with `{}` (or `bash ci/install-externals.sh`)",
-            code.binary(),
+            "{}; install with `{}` (or `bash ci/install-externals.sh`)",
+            code.not_found(),
             code.install_hint()
         ));
         return None;
@@ -89,19 +89,28 @@ pub fn command(
     yade_threads: Option<usize>,
 ) -> Result<Command> {
     let mut cmd = match (np, code) {
-        (Some(k), Code::Lammps | Code::Liggghts) => {
-            let Some(mpirun) = decks::which("mpirun") else {
-                bail!("running {code} on {k} processes needs `mpirun` (Debian: apt-get install -y --no-install-recommends openmpi-bin)");
-            };
-            let mut c = Command::new(mpirun);
-            c.args([
-                "--allow-run-as-root",
-                "--oversubscribe",
-                "-np",
-                &k.to_string(),
-            ]);
-            c.arg(binary);
-            c
+        (Some(k), Code::Lammps | Code::Lammps2025 | Code::Liggghts) => {
+            // LAMMPS 2025 links the MPICH of its virtual environment: its own mpirun.
+            let venv_mpirun = binary.with_file_name("mpirun");
+            if code == Code::Lammps2025 && venv_mpirun.is_file() {
+                // MPICH's hydra: no OpenMPI flags.
+                let mut c = Command::new(venv_mpirun);
+                c.args(["-np", &k.to_string()]).arg(binary);
+                c
+            } else {
+                let Some(mpirun) = decks::which("mpirun") else {
+                    bail!("running {code} on {k} processes needs `mpirun` (Debian: apt-get install -y --no-install-recommends openmpi-bin)");
+                };
+                let mut c = Command::new(mpirun);
+                c.args([
+                    "--allow-run-as-root",
+                    "--oversubscribe",
+                    "-np",
+                    &k.to_string(),
+                ]);
+                c.arg(binary);
+                c
+            }
         }
         _ => Command::new(binary),
     };
@@ -378,7 +387,7 @@ pub fn last_line(path: &Path) -> String {
 pub fn version_line(code: Code, stdout: &Path) -> Option<String> {
     let text = std::fs::read_to_string(stdout).ok()?;
     let key = match code {
-        Code::Lammps => "LAMMPS (",
+        Code::Lammps | Code::Lammps2025 => "LAMMPS (",
         Code::Liggghts => "LIGGGHTS (",
         Code::Yade => "Yade ",
         Code::Rust => return None,
@@ -417,7 +426,7 @@ pub fn log_steps(dir: &Path) -> Option<u64> {
 pub fn loop_time(code: Code, dir: &Path) -> Option<f64> {
     let text = std::fs::read_to_string(dir.join("stdout.log")).ok()?;
     match code {
-        Code::Lammps | Code::Liggghts => {
+        Code::Lammps | Code::Lammps2025 | Code::Liggghts => {
             let times: Vec<f64> = text
                 .lines()
                 .filter_map(|l| l.strip_prefix("Loop time of "))

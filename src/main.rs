@@ -89,7 +89,7 @@ enum Command {
         /// Every embedded scene.
         #[arg(long)]
         all: bool,
-        /// Codes, comma-separated (default: lammps,liggghts,yade).
+        /// Codes, comma-separated: lammps (Debian's 2021), lammps-2025, liggghts, yade (default: all).
         #[arg(long, value_delimiter = ',')]
         codes: Vec<String>,
         /// Output directory instead of `reference-inputs/<scene>/` (one scene only).
@@ -103,7 +103,7 @@ enum Command {
     Compare {
         /// Scene file or embedded scene name.
         scene: String,
-        /// Codes, comma-separated (default: rust,lammps,liggghts,yade).
+        /// Codes, comma-separated: rust, lammps (Debian's 2021), lammps-2025, liggghts, yade (default: all).
         #[arg(long, value_delimiter = ',')]
         codes: Vec<String>,
         /// Output directory (default: `runs/compare/<scene>`).

@@ -24,7 +24,7 @@ pub fn parse_codes(list: &[String], allow_rust: bool) -> Result<Vec<Code>> {
                 }
             }
             None => bail!(
-                "--codes: unknown code `{name}`; expected a comma-separated list of rust, lammps, liggghts, yade"
+                "--codes: unknown code `{name}`; expected a comma-separated list of rust, lammps, lammps-2025, liggghts, yade"
             ),
         }
     }
@@ -132,7 +132,7 @@ pub fn capabilities_command(scene: Option<&str>) -> Result<i32> {
             let start =
                 Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
             println!("scene {} uses:", scene.name);
-            println!("| feature | lammps | liggghts | yade |\n| --- | --- | --- | --- |");
+            println!("{}", capability::header());
             for f in decks::features(&start) {
                 print!("| `{}` |", f.key());
                 for c in Code::EXTERNAL {

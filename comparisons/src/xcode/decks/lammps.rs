@@ -1,4 +1,6 @@
-//! LAMMPS deck generator (Debian LAMMPS 29 Sep 2021, GRANULAR package, `shared/external-codes.md`).
+//! LAMMPS deck generator for Debian's LAMMPS 29 Sep 2021 (`lammps`) and the current release,
+//! 22 Jul 2025 Update 4 (`lammps-2025`), GRANULAR package (`shared/external-codes.md`). The two
+//! decks differ only in the normal dashpot's `damping` sub-model ([`damping`]).
 //!
 //! Files: `in.lammps` (input script) and `data.lammps` (atoms, `atom_style sphere`). Run as
 //! `lmp -in in.lammps -log log.lammps -screen none`-like with the deck directory as cwd. The
@@ -16,6 +18,14 @@
 //!   on unloading, no tangential damping).
 //! * Linear: `hooke K_N e` with `damping tsuji` (c = 2ζ, k = K_N) and
 //!   `tangential linear_history K_T 0.0 μ`.
+//! * LAMMPS 2025 rejects a negative restitution. Its `damping coeff_restitution` gives
+//!   F_d = d(e)·√(m* F_ne/h) ḣ with d = −2 ln e/√(π² + ln²e) (hooke) or −√5 ln e/√(π² + ln²e)
+//!   (Hertz, F_ne/h = (2/3)K_N): exact with e = exp(−πζ/√(1−ζ²)) (linear) or
+//!   e = exp(−π√6ζ/√(5−6ζ²)) (Hertz), which is AR07's own restitution, for ζ < 1 and ζ < 0.913.
+//!   Hertz at ζ = 0.98 needs d = √6ζ > √5: there `damping tsuji` is exact with the root of
+//!   c(e) = √6ζ on the polynomial's rising branch e > 1.119 (e = 1.560 for ζ = 0.98), which
+//!   this release accepts without a range check (two-particle tests,
+//!   comparisons/tests/lammps_two_particle.rs).
 //! * μ = 0: `tangential linear_nohistory 0.0 0.0`; μ = ∞: μ = 1e300.
 //!
 //! Stages: `Compress` is `fix press/berendsen iso P P τ modulus B dilate all` on the virial
@@ -55,8 +65,44 @@ pub fn tsuji_restitution(c: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
+/// The restitution above 1 for which `damping tsuji` gives `c` > 0: the polynomial's rising
+/// branch past its minimum at e ≈ 1.119 (LAMMPS 2025 accepts e > 1 there).
+pub fn tsuji_restitution_above_one(c: f64) -> f64 {
+    let (mut lo, mut hi) = (1.119_f64, 3.0_f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if tsuji_coefficient(mid) < c {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The `damping` sub-model and the restitution `e` to give the normal model, for a dashpot
+/// 2ζ√(m* K) with `c` = √6ζ (Hertz, `hertz` true) or 2ζ (hooke): Tsuji's negative root in
+/// LAMMPS 2021; `coeff_restitution` (or Tsuji's root above 1) in LAMMPS 2025.
+pub fn damping(code: Code, c: f64, hertz: bool) -> (&'static str, f64) {
+    if code != Code::Lammps2025 {
+        return ("tsuji", tsuji_restitution(c));
+    }
+    // coeff_restitution: d = −k ln e/√(π² + ln²e), k = √5 (Hertz) or 2 (hooke), d < k.
+    let k = if hertz { 5f64.sqrt() } else { 2.0 };
+    if c <= 0.0 {
+        ("coeff_restitution", 1.0)
+    } else if c < k {
+        (
+            "coeff_restitution",
+            (-PI * c / (k * k - c * c).sqrt()).exp(),
+        )
+    } else {
+        ("tsuji", tsuji_restitution_above_one(c))
+    }
+}
+
 /// `pair_coeff * * …` of the scene's law at stiffness parameter `kappa` and friction `mu`.
-fn pair_coeff(law: &Law, kappa: f64, mu: Mu) -> String {
+fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code) -> String {
     let tangential = |kt: &str| -> String {
         if mu.value() > 0.0 {
             format!("tangential {kt} 0.0 {}", super::mu_text(mu))
@@ -68,14 +114,14 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu) -> String {
         Law::HertzMindlin { zeta, poisson, .. } => {
             // κ = (Ẽ/P)^(2/3) with P = 1 (AR07 (21)).
             let e_tilde = kappa.powf(1.5);
-            let e = tsuji_restitution(6f64.sqrt() * zeta);
+            let (model, e) = damping(code, 6f64.sqrt() * zeta, true);
             let t = if mu.value() > 0.0 {
                 tangential("mindlin_rescale/force NULL")
             } else {
                 tangential("")
             };
             format!(
-                "pair_coeff * * hertz/material {} {} {} {t} damping tsuji",
+                "pair_coeff * * hertz/material {} {} {} {t} damping {model}",
                 num(e_tilde * (1.0 - poisson * poisson)),
                 num(e),
                 num(*poisson)
@@ -85,10 +131,10 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu) -> String {
             zeta, kt_over_kn, ..
         } => {
             // κ = K_N/P (cohesionless, P = 1).
-            let e = tsuji_restitution(2.0 * zeta);
+            let (model, e) = damping(code, 2.0 * zeta, false);
             let t = tangential(&format!("linear_history {}", num(kappa * kt_over_kn)));
             format!(
-                "pair_coeff * * hooke {} {} {t} damping tsuji",
+                "pair_coeff * * hooke {} {} {t} damping {model}",
                 num(kappa),
                 num(e)
             )
@@ -96,12 +142,12 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu) -> String {
     }
 }
 
-/// The LAMMPS deck of `start`.
-pub fn deck(start: &Start, deviations: &[String]) -> Deck {
+/// The LAMMPS deck of `start` for `code` (either LAMMPS version).
+pub fn deck(start: &Start, code: Code, deviations: &[String]) -> Deck {
     Deck {
-        code: Code::Lammps,
+        code,
         files: vec![
-            ("in.lammps".into(), input(start, deviations)),
+            ("in.lammps".into(), input(start, code, deviations)),
             ("data.lammps".into(), data(start)),
         ],
         deviations: deviations.to_vec(),
@@ -156,11 +202,11 @@ fn data(start: &Start) -> String {
     s
 }
 
-fn input(start: &Start, deviations: &[String]) -> String {
+fn input(start: &Start, code: Code, deviations: &[String]) -> String {
     let d3 = start.dimension == 3;
     let n = start.n();
     let mut s = String::new();
-    for h in header_lines(start, Code::Lammps, deviations) {
+    for h in header_lines(start, code, deviations) {
         let _ = writeln!(s, "# {h}");
     }
     let solid: f64 = start
@@ -228,8 +274,10 @@ fn input(start: &Start, deviations: &[String]) -> String {
         coeff = start
             .stages
             .first()
-            .map(|st| pair_coeff(start.law(), st.kappa, st.mu))
-            .unwrap_or_else(|| pair_coeff(start.law(), start.law().kappa(), Mu::Finite(0.0))),
+            .map(|st| pair_coeff(start.law(), st.kappa, st.mu, code))
+            .unwrap_or_else(|| {
+                pair_coeff(start.law(), start.law().kappa(), Mu::Finite(0.0), code)
+            }),
         disc = if d3 { "" } else { " disc" },
         e2d = if d3 { "" } else { "fix e2d all enforce2d\n" },
         solid = num(solid),
@@ -240,7 +288,7 @@ fn input(start: &Start, deviations: &[String]) -> String {
         let _ = writeln!(s, "\n# Stage {k1}: {:?}", st.kind);
         let _ = writeln!(s, "timestep {}", num(st.dt));
         if k > 0 {
-            let _ = writeln!(s, "{}", pair_coeff(start.law(), st.kappa, st.mu));
+            let _ = writeln!(s, "{}", pair_coeff(start.law(), st.kappa, st.mu, code));
         }
         let mut crit = vec![
             format!("(c_fmax[1]<{})", num(tol.force)),

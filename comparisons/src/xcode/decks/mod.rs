@@ -307,7 +307,7 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
         })
         .collect();
     let mut deck = match code {
-        Code::Lammps => lammps::deck(start, &deviations),
+        Code::Lammps | Code::Lammps2025 => lammps::deck(start, code, &deviations),
         Code::Liggghts => liggghts::deck(start, &deviations),
         Code::Yade => yade::deck(start, &deviations),
         Code::Rust => unreachable!("grainbench runs scenes, not decks"),

@@ -103,7 +103,7 @@ pub struct RawContact {
 /// Reads the final state a deck of `code` left in `dir`.
 pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Snapshot, ImportError> {
     let raw = match code {
-        Code::Lammps => lammps::read_dir(dir, meta)?,
+        Code::Lammps | Code::Lammps2025 => lammps::read_dir(dir, meta)?,
         Code::Liggghts => liggghts::read_dir(dir, meta)?,
         Code::Yade => yade::read_dir(dir, meta)?,
         Code::Rust => {
