@@ -227,12 +227,13 @@ pub struct Numerics {
     /// Verlet skin in units of a.
     pub skin: f64,
     /// Generalized mass of the cell as a fraction of the total grain mass (AR07 §II.B: ~1;
-    /// GRC07 §II.A: 3/10, divided by the cell length, see `cell_mass_per_length`).
+    /// GRC07 §II.A: 3/10).
     pub cell_mass: f64,
-    /// Divide the cell mass by the cell length L/a (GRC07 §II.A: "a fraction of the sum of
-    /// grain masses (3/10 in most calculations), divided by a linear size L of the cell"; their
-    /// (3) is written for strains, M ε̈ = σ^I − σ^M, which makes M a mass per length). L is
-    /// taken when the soft-contact stages start.
+    /// Divide the cell mass by the cell length L/a (GRC07 §II.A's wording: "a fraction of the
+    /// sum of grain masses (3/10 in most calculations), divided by a linear size L of the
+    /// cell"). L is taken when the soft-contact stages start. The GRC07 scenes leave it off:
+    /// with 2D stresses (force per length) in GRC07 (3), M ε̈ = σ^I − σ^M, M is a mass, and
+    /// the 42–70 × lighter cell this gives makes z miss T.III by 5–10 % (README, GRC07).
     pub cell_mass_per_length: bool,
     /// Steps between equilibrium checks and progress reports.
     pub check_every: u64,
