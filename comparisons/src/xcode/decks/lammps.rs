@@ -361,3 +361,49 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
     );
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// LAMMPS 2025 `coeff_restitution`: d(e) = −k ln e/√(π² + ln²e).
+    fn coeff_restitution(e: f64, k: f64) -> f64 {
+        -k * e.ln() / (PI * PI + e.ln().powi(2)).sqrt()
+    }
+
+    #[test]
+    fn lammps_2025_damping_gives_back_the_coefficient() {
+        for (zeta, hertz) in [
+            (0.098, true),
+            (0.5, true),
+            (0.9, true),
+            (0.8, false),
+            (0.98, false),
+        ] {
+            let (c, k) = if hertz {
+                (6f64.sqrt() * zeta, 5f64.sqrt())
+            } else {
+                (2.0 * zeta, 2.0)
+            };
+            let (model, e) = damping(Code::Lammps2025, c, hertz);
+            assert_eq!(model, "coeff_restitution", "ζ = {zeta}");
+            assert!((0.0..1.0).contains(&e));
+            assert!((coeff_restitution(e, k) - c).abs() < 1e-12, "ζ = {zeta}");
+        }
+        // Hertz at ζ = 0.98 is past coeff_restitution's reach (√6ζ > √5): Tsuji above 1.
+        let c = 6f64.sqrt() * 0.98;
+        let (model, e) = damping(Code::Lammps2025, c, true);
+        assert_eq!(model, "tsuji");
+        assert!((e - 1.560056331).abs() < 1e-6, "{e}");
+        assert!((tsuji_coefficient(e) - c).abs() < 1e-9);
+        // No damping: e = 1 (e = 0 gives NaN forces in that release).
+        assert_eq!(
+            damping(Code::Lammps2025, 0.0, true),
+            ("coeff_restitution", 1.0)
+        );
+        // LAMMPS 2021 keeps Tsuji's negative root.
+        let (model, e) = damping(Code::Lammps, c, true);
+        assert_eq!(model, "tsuji");
+        assert!(e < 0.0 && (tsuji_coefficient(e) - c).abs() < 1e-9);
+    }
+}
