@@ -40,11 +40,8 @@ pub fn load_scene(spec: &str) -> Result<Scene> {
     if path.is_file() || (path.exists() && library::scene_text(spec).is_none()) {
         return Ok(Scene::from_file(path)?);
     }
-    if let Some(text) = library::scene_text(spec) {
-        return Ok(Scene::from_toml(
-            text,
-            Path::new(&format!("<embedded:{spec}>")),
-        )?);
+    if let Some(scene) = library::scene(spec) {
+        return Ok(scene?);
     }
     let names: Vec<&str> = library::SCENES.iter().map(|(n, _)| *n).collect();
     bail!(

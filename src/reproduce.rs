@@ -77,10 +77,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     if a.seeds.is_empty() {
         bail!("--seeds needs at least one seed");
     }
-    let mut base = grainbench_engine::Scene::from_toml(
-        library::scene_text(&scene_name).expect("checked above"),
-        Path::new(&format!("<embedded:{scene_name}>")),
-    )?;
+    let mut base = library::scene(&scene_name).expect("checked above")?;
     if let Some(t) = a.max_time {
         if !(t.is_finite() && t > 0.0) {
             bail!("--max-time must be a positive number of reduced time units, got {t}");
@@ -245,9 +242,8 @@ pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) 
     written
 }
 
-/// Writes golden/<scene>/rust.json: what was run, how long it took, and every metric per seed.
-/// golden/<scene>/rust.json: the command, the scene as run (`settings`, seed aside, with
-/// `--max-time` applied), and each seed's status, stages and metrics.
+/// Writes golden/<scene>/rust.json: the command, the scene as run (`settings`, seed aside, with
+/// `--max-time` applied), and each seed's status, wall time, stages and metrics.
 fn record(
     a: &Args,
     scene_name: &str,

@@ -24,7 +24,8 @@ pub fn parse_codes(list: &[String], allow_rust: bool) -> Result<Vec<Code>> {
                 }
             }
             None => bail!(
-                "--codes: unknown code `{name}`; expected a comma-separated list of rust, lammps, lammps-2025, liggghts, yade"
+                "--codes: unknown code `{name}`; expected a comma-separated list of {}",
+                Code::ALL.map(Code::name).join(", ")
             ),
         }
     }

@@ -187,10 +187,9 @@ fn golden_records_were_made_with_the_scenes_as_they_are() {
         };
         let recorded: Scene = serde_json::from_value(settings.clone())
             .unwrap_or_else(|e| panic!("{}: settings: {e}", file.display()));
-        let text = library::scene_text(name)
-            .unwrap_or_else(|| panic!("{}: no embedded scene {name}", file.display()));
-        let mut now =
-            Scene::from_toml(text, std::path::Path::new(&format!("<embedded:{name}>"))).unwrap();
+        let mut now = library::scene(name)
+            .unwrap_or_else(|| panic!("{}: no embedded scene {name}", file.display()))
+            .unwrap();
         now.seed = recorded.seed;
         if let Some(t) = doc["max_time"].as_f64() {
             now.cap_max_time(t);

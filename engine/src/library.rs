@@ -74,6 +74,15 @@ pub fn scene_text(name: &str) -> Option<&'static str> {
     SCENES.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
 }
 
+/// The embedded scene called `name`, read (errors name the file `<embedded:NAME>`).
+pub fn scene(name: &str) -> Option<Result<crate::Scene, crate::scene::SceneError>> {
+    let text = scene_text(name)?;
+    Some(crate::Scene::from_toml(
+        text,
+        std::path::Path::new(&format!("<embedded:{name}>")),
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

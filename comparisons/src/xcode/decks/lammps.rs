@@ -49,14 +49,17 @@ pub fn tsuji_coefficient(e: f64) -> f64 {
         + 4.8218 * e.powi(6)
 }
 
-/// The restitution `e` in [−1, 1) for which LAMMPS `damping tsuji` gives the coefficient `c`
-/// (negative when c > 1.2728, i.e. above ζ ≈ 0.52 in Hertz units). Bisection: the polynomial
-/// decreases on [−1, 1].
-pub fn tsuji_restitution(c: f64) -> f64 {
-    let (mut lo, mut hi) = (-1.0_f64, 1.0_f64);
+/// The root of c(e) = `c` on `[lo, hi]`, where the Tsuji polynomial is monotonic (bisection).
+fn tsuji_root(c: f64, (mut lo, mut hi): (f64, f64)) -> f64 {
+    let rising = tsuji_coefficient(hi) > tsuji_coefficient(lo);
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if tsuji_coefficient(mid) > c {
+        let root_above = if rising {
+            tsuji_coefficient(mid) < c
+        } else {
+            tsuji_coefficient(mid) > c
+        };
+        if root_above {
             lo = mid;
         } else {
             hi = mid;
@@ -65,19 +68,17 @@ pub fn tsuji_restitution(c: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
+/// The restitution `e` in [−1, 1) for which LAMMPS `damping tsuji` gives the coefficient `c`
+/// (negative when c > 1.2728, i.e. above ζ ≈ 0.52 in Hertz units): the polynomial decreases
+/// on [−1, 1].
+pub fn tsuji_restitution(c: f64) -> f64 {
+    tsuji_root(c, (-1.0, 1.0))
+}
+
 /// The restitution above 1 for which `damping tsuji` gives `c` > 0: the polynomial's rising
 /// branch past its minimum at e ≈ 1.119 (LAMMPS 2025 accepts e > 1 there).
 pub fn tsuji_restitution_above_one(c: f64) -> f64 {
-    let (mut lo, mut hi) = (1.119_f64, 3.0_f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if tsuji_coefficient(mid) < c {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
+    tsuji_root(c, (1.119, 3.0))
 }
 
 /// The `damping` sub-model and the restitution `e` to give the normal model, for a dashpot
