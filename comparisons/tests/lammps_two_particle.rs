@@ -77,6 +77,8 @@ fn start(h: f64, v1: [f64; 3], v2: [f64; 3], m: f64, steps: u64, dt: f64) -> Sta
                 kinetic_per_grain: 1e-8,
             },
             check_every: 10,
+            relax: None,
+            window: 0.0,
         }],
     }
 }
@@ -355,4 +357,128 @@ criteria = {{ preset = "ar07" }}
     );
     assert!(want.abs() < mu * n);
     assert!(rel(t[1], want) < 1e-3);
+}
+
+/// GRC07 adhesive law (issue 14) in LAMMPS 2025: `hybrid/overlay granular lepton/sphere`, two
+/// unequal disks (d = 1 and 0.6) at rest at overlaps and gaps across the attraction range and
+/// approaching at v: the total normal force is ours (K_N δ + 2ζ√(m* K_N)·v − F0 in contact,
+/// −F0(1 − h/D0) for 0 ≤ h ≤ D0, nothing beyond), to 1e-9 F0.
+#[test]
+fn lammps_2025_two_particle_adhesion() {
+    use grainbench_engine::contact::linear::{Adhesion, Linear};
+    use grainbench_engine::contact::slider::{Coulomb, NoRolling};
+    use grainbench_engine::contact::{ContactLaw, Pair};
+    use grainbench_engine::geometry::{Dim, D2};
+    type V2 = <D2 as Dim>::V;
+    let code = Code::Lammps2025;
+    if !common::present(code) {
+        return;
+    }
+    let (kn, zeta, mu, d0) = (1e4, 0.8, 0.5, 1e-3);
+    let text = format!(
+        r#"
+name = "lammps-two-adhesive-disks"
+description = "two adhesive disks"
+dimension = 2
+seed = 1
+[particles]
+count = 2
+min_diameter = 0.6
+[initial]
+packing_fraction = 0.01
+[law]
+kind = "linear"
+kappa = {kn}
+mu = {mu}
+zeta = {zeta}
+cohesion = {{ d0 = {d0} }}
+[[protocol]]
+kind = "compress"
+pressure = 0.01
+inertia_cap = 0.01
+max_time = 10.0
+criteria = {{ preset = "grc07" }}
+"#
+    );
+    let scene = Scene::from_toml(&text, Path::new("lammps-two-adhesive-disks.toml")).unwrap();
+    let (d1, d2) = (1.0, 0.6);
+    let (m1, m2) = (d1 * d1, d2 * d2);
+    let m_eff = m1 * m2 / (m1 + m2);
+    let disks = |gap: f64, v: f64| {
+        let mut st = start(0.0, [0.0; 3], [0.0; 3], 1.0, 0, 1e-4);
+        st.scene = scene.clone();
+        st.dimension = 2;
+        st.lengths.truncate(2);
+        st.diameter = vec![d1, d2];
+        st.mass = vec![m1, m2];
+        st.inertia = vec![0.125 * m1 * d1 * d1, 0.125 * m2 * d2 * d2];
+        // Approaching at v with no net momentum.
+        st.velocity = vec![
+            vec![v * m2 / (m1 + m2), 0.0],
+            vec![-v * m1 / (m1 + m2), 0.0],
+        ];
+        st.position = vec![vec![9.0, 10.0], vec![9.0 + 0.5 * (d1 + d2) + gap, 10.0]];
+        st.stages[0].kappa = kn;
+        st.stages[0].mu = Mu::Finite(mu);
+        st
+    };
+    let law: Linear<Adhesion, Coulomb, NoRolling> = Linear {
+        kn,
+        kt: kn,
+        zeta,
+        zeta_t: 0.0,
+        cohesion: Adhesion { f0: 1.0, d0 },
+        friction: Coulomb { mu },
+        rolling: NoRolling,
+    };
+    let ours = |gap: f64, v: f64| {
+        let p = Pair::<D2> {
+            n: V2::new(1.0, 0.0),
+            gap,
+            v_contact: V2::new(-v, 0.0),
+            w_i: 0.0,
+            w_j: 0.0,
+            r_eff: (0.5 * d1) * (0.5 * d2) / (0.5 * (d1 + d2)),
+            m_eff,
+        };
+        let mut hist = Default::default();
+        ContactLaw::<D2>::interact(&law, &p, &mut hist, 0.0).normal
+    };
+    let mut seen = 0;
+    for (gap, v) in [
+        (-1e-3, 0.0),
+        (-2e-4, 0.0),
+        (-2e-4, 0.05),
+        (1e-4, 0.0),
+        (5e-4, 0.0),
+        (9e-4, 0.0),
+        (1.2e-3, 0.0),
+    ] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let deck = decks::deck(&disks(gap, v), code).expect("deck");
+        for (name, text) in &deck.files {
+            std::fs::write(dir.path().join(name), text).unwrap();
+        }
+        let out = Command::new(code.find().expect("checked by common::present"))
+            .args(&deck.args)
+            .args(["-screen", "none"])
+            .current_dir(dir.path())
+            .output()
+            .expect("lmp runs");
+        let log = std::fs::read_to_string(dir.path().join("log.lammps")).unwrap_or_default();
+        assert!(out.status.success(), "lmp failed:\n{log}");
+        let meta = Meta::read(dir.path()).unwrap();
+        let raw = import::lammps::read_dir(dir.path(), &meta).expect("read");
+        let want = ours(gap, v);
+        let got = raw.contacts.first().map(|c| c.normal).unwrap_or(0.0);
+        eprintln!("{code} adhesion: gap {gap:e}, v {v}: N {got}, ours {want}");
+        assert!(raw.contacts.len() <= 1, "{:?}", raw.contacts);
+        assert_eq!(raw.contacts.len(), usize::from(gap <= d0), "gap {gap}");
+        assert!(
+            (got - want).abs() < 1e-9,
+            "gap {gap}, v {v}: {got} vs {want}"
+        );
+        seen += 1;
+    }
+    assert_eq!(seen, 7);
 }

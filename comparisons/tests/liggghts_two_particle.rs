@@ -73,6 +73,8 @@ fn start(zeta: f64, h0: f64, v2: [f64; 3], steps: u64, dt: f64) -> Start {
                 kinetic_per_grain: 0.0,
             },
             check_every: steps,
+            relax: None,
+            window: 0.0,
         }],
     }
 }

@@ -107,6 +107,8 @@ fn setup() -> Setup {
             dt: DT,
             tolerances: tiny,
             check_every: STEPS,
+            relax: None,
+            window: 0.0,
         }],
     };
     Setup { start }

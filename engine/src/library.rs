@@ -10,6 +10,7 @@ macro_rules! scenes {
 pub const SCENES: &[(&str, &str)] = scenes!(
     "default",
     "xcode-smoke",
+    "xcode-cohesive-smoke",
     "ar07-A-n1372",
     "ar07-D-10kPa-n1372",
     "ar07-A",

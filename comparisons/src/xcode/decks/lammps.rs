@@ -37,7 +37,7 @@
 //! `check_every` steps.
 
 use super::{header_lines, num, Code, Deck, StageKind, Start};
-use grainbench_engine::scene::{Law, Mu};
+use grainbench_engine::scene::{Law, Mu, Relax};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 
@@ -102,11 +102,41 @@ pub fn damping(code: Code, c: f64, hertz: bool) -> (&'static str, f64) {
     }
 }
 
-/// `pair_coeff * * …` of the scene's law at stiffness parameter `kappa` and friction `mu`.
-fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code) -> String {
-    let tangential = |kt: &str| -> String {
+/// GRC07 (4)–(5) attraction as a `lepton/sphere` potential of the surface gap
+/// h = r − R_i − R_j (lepton differentiates it): U = F0 h − F0 D0/2 in contact (force −F0),
+/// F0(h − h²/2D0) − F0 D0/2 for 0 ≤ h ≤ D0 (force −F0(1 − h/D0)), 0 beyond.
+pub fn lepton_attraction(f0: f64, d0: f64) -> String {
+    format!(
+        "select(step(-h), F0*h - 0.5*F0*D0, select(step(D0-h), F0*(h-h^2/(2*D0)) - 0.5*F0*D0, 0)); h=r-radi-radj; F0={}; D0={}",
+        num(f0),
+        num(d0)
+    )
+}
+
+/// `pair_style` of the scene: `granular`, or with adhesion (LAMMPS 2025 only, refused for
+/// 2021 by the matrix) `hybrid/overlay granular lepton/sphere` with a cut-off covering
+/// 2R_max + D0.
+fn pair_style(start: &Start) -> String {
+    match start.law().cohesion() {
+        None => "pair_style granular".into(),
+        Some(c) => {
+            let dmax = start.diameter.iter().fold(0.0_f64, |a, &d| a.max(d));
+            format!(
+                "pair_style hybrid/overlay granular lepton/sphere {}",
+                num(dmax + 2.0 * c.d0)
+            )
+        }
+    }
+}
+
+/// `pair_coeff * * …` lines of the scene's law at stiffness parameter `kappa` and friction
+/// `mu`; `zeta_t` > 0 adds a tangential dashpot of that fraction of critical (linear law:
+/// `linear_history`'s damping is x_t times the normal one, 2ζ√(m* K_N), so x_t = ζ_t√K_T/(ζ√K_N)).
+fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code, zeta_t: f64) -> String {
+    let tangential = |kt: &str, damp: f64| -> String {
         if mu.value() > 0.0 {
-            format!("tangential {kt} 0.0 {}", super::mu_text(mu))
+            let damp = if damp > 0.0 { num(damp) } else { "0.0".into() };
+            format!("tangential {kt} {damp} {}", super::mu_text(mu))
         } else {
             "tangential linear_nohistory 0.0 0.0".into()
         }
@@ -117,9 +147,9 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code) -> String {
             let e_tilde = kappa.powf(1.5);
             let (model, e) = damping(code, 6f64.sqrt() * zeta, true);
             let t = if mu.value() > 0.0 {
-                tangential("mindlin_rescale/force NULL")
+                tangential("mindlin_rescale/force NULL", 0.0)
             } else {
-                tangential("")
+                tangential("", 0.0)
             };
             format!(
                 "pair_coeff * * hertz/material {} {} {} {t} damping {model}",
@@ -129,19 +159,37 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code) -> String {
             )
         }
         Law::Linear {
-            zeta, kt_over_kn, ..
+            zeta,
+            kt_over_kn,
+            cohesion,
+            ..
         } => {
-            // κ = K_N/P (cohesionless, P = 1).
+            // κ = K_N/P (cohesionless, P = 1) or K_N a/F0 (cohesive, F0 = 1).
             let (model, e) = damping(code, 2.0 * zeta, false);
-            let t = tangential(&format!("linear_history {}", num(kappa * kt_over_kn)));
-            format!(
-                "pair_coeff * * hooke {} {} {t} damping {model}",
-                num(kappa),
-                num(e)
-            )
+            let xt = if zeta_t > 0.0 && *zeta > 0.0 {
+                zeta_t * kt_over_kn.sqrt() / zeta
+            } else {
+                0.0
+            };
+            let t = tangential(&format!("linear_history {}", num(kappa * kt_over_kn)), xt);
+            let granular = format!("hooke {} {} {t} damping {model}", num(kappa), num(e));
+            match cohesion {
+                None => format!("pair_coeff * * {granular}"),
+                Some(c) => format!(
+                    "pair_coeff * * granular {granular}\npair_coeff * * lepton/sphere \"{}\"",
+                    lepton_attraction(1.0, c.d0)
+                ),
+            }
         }
     }
 }
+
+/// Largest strain rate (1/T0) that sets the gain of the adhesive decks' servo: GRC07 §III.B.1's
+/// cap; a higher gain makes the first-order servo chatter on a stiff packing.
+const MAX_SERVO_RATE: f64 = 0.05;
+
+/// Stress control of adhesive decks (replaces the matrix's Berendsen line in their header).
+pub const ADHESIVE_STRESS_CONTROL: &str = "stress-control: fix deform/pressure (LAMMPS 2025), per-axis strain rate 2·min(cap, 0.05/T0)·(σ_αα − P)/P on the virial stress, at most the cap (Berendsen's unbounded rate collapses the cell when an adhesive packing's virial swings to ±100 P), no cell mass";
 
 /// The LAMMPS deck of `start` for `code` (either LAMMPS version).
 pub fn deck(start: &Start, code: Code, deviations: &[String]) -> Deck {
@@ -248,7 +296,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
          atom_modify map array\n\
          comm_modify vel yes\n\
          read_data data.lammps\n\
-         pair_style granular\n\
+         {style}\n\
          {coeff}\n\
          neighbor 0.2 bin\n\
          neigh_modify delay 0 every 1 check yes\n\
@@ -269,16 +317,20 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
          variable kpg equal c_eksum/{n}\n\
          variable phi equal {solid}/vol\n\
          # Contacts: pair/local dist, normal force on I (fx fy fz), tangential (p1 p2 p3).\n\
-         compute pl all pair/local dist fx fy fz p1 p2 p3 cutoff radius\n\
-         compute prl all property/local patom1 patom2 cutoff radius\n",
+         compute pl all pair/local dist fx fy fz p1 p2 p3{cutoff}\n\
+         compute prl all property/local patom1 patom2{cutoff}\n",
         dim = start.dimension,
         coeff = start
             .stages
             .first()
-            .map(|st| pair_coeff(start.law(), st.kappa, st.mu, code))
+            .map(|st| pair_coeff(start.law(), st.kappa, st.mu, code, 0.0))
             .unwrap_or_else(|| {
-                pair_coeff(start.law(), start.law().kappa(), Mu::Finite(0.0), code)
+                pair_coeff(start.law(), start.law().kappa(), Mu::Finite(0.0), code, 0.0)
             }),
+        style = pair_style(start),
+        // With adhesion every pair within the cut-off (distant attractions included); the
+        // importer drops the ones that carry no force.
+        cutoff = if start.cohesive() { "" } else { " cutoff radius" },
         disc = if d3 { "" } else { " disc" },
         e2d = if d3 { "" } else { "fix e2d all enforce2d\n" },
         solid = num(solid),
@@ -289,7 +341,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         let _ = writeln!(s, "\n# Stage {k1}: {:?}", st.kind);
         let _ = writeln!(s, "timestep {}", num(st.dt));
         if k > 0 {
-            let _ = writeln!(s, "{}", pair_coeff(start.law(), st.kappa, st.mu, code));
+            let _ = writeln!(s, "{}", pair_coeff(start.law(), st.kappa, st.mu, code, 0.0));
         }
         let mut crit = vec![
             format!("(c_fmax[1]<{})", num(tol.force)),
@@ -299,19 +351,45 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
             crit.push(format!("(c_fmax[2]<{})", num(tol.moment)));
         }
         if let StageKind::Compress { pressure } = st.kind {
-            let b = pressure / (3.0 * st.max_strain_rate);
-            let _ = writeln!(
-                s,
-                "# Berendsen: strain rate -(P_t - P)/(3 B tau); tau = 1, B = P_t/(3 rate cap) = {}",
-                num(b)
-            );
-            let _ = writeln!(
-                s,
-                "fix baro all press/berendsen aniso {p} {p} 1 modulus {b} dilate all\n\
-                 fix_modify baro press pvir",
-                p = num(pressure),
-                b = num(b)
-            );
+            if start.cohesive() {
+                // An adhesive packing's virial swings to ±100 P while grains collide and
+                // stick: Berendsen's rate (P − σ)/(3Bτ) has no bound and collapses the cell.
+                // LAMMPS 2025's deform/pressure caps it: per axis, rate = g(σ_αα − P)/P at
+                // most the cap, g = 2·min(cap, 0.05/T0) (full cap beyond 50 % of the target;
+                // an uncapped GRC07 method-1 stage, cap 1000/T0, gets the 0.05/T0 gain).
+                let axes = ["x", "y", "z"][..start.dimension]
+                    .iter()
+                    .map(|a| {
+                        format!(
+                            "{a} pressure {} {}",
+                            num(pressure),
+                            num(2.0 * st.max_strain_rate.min(MAX_SERVO_RATE))
+                        )
+                    })
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                let _ = writeln!(
+                    s,
+                    "# Stress control: fix deform/pressure, per-axis strain rate 2·cap·(σ_αα − P)/P, at most the cap\n\
+                     fix baro all deform/pressure 1 {axes} max/rate {} normalize/pressure yes remap x\n\
+                     fix_modify baro press pvir",
+                    num(st.max_strain_rate)
+                );
+            } else {
+                let b = pressure / (3.0 * st.max_strain_rate);
+                let _ = writeln!(
+                    s,
+                    "# Berendsen: strain rate -(P_t - P)/(3 B tau); tau = 1, B = P_t/(3 rate cap) = {}",
+                    num(b)
+                );
+                let _ = writeln!(
+                    s,
+                    "fix baro all press/berendsen aniso {p} {p} 1 modulus {b} dilate all\n\
+                     fix_modify baro press pvir",
+                    p = num(pressure),
+                    b = num(b)
+                );
+            }
             for a in 1..=start.dimension {
                 crit.push(format!(
                     "(abs(c_pvir[{a}]-{})<{})",
@@ -321,29 +399,33 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
             }
         }
         let _ = writeln!(s, "variable ok{k1} equal {}", crit.join("*"));
-        let _ = writeln!(
-            s,
-            "thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k1}\n\
-             thermo_modify norm no flush yes\n\
-             thermo {}",
-            st.check_every
-        );
         let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
-        if !full_time {
+        if let Some(relax) = st.relax {
+            relaxed_stage(&mut s, start, st, k1, relax, code);
+        } else {
             let _ = writeln!(
                 s,
-                "fix halt all halt {} v_ok{k1} > 0.5 error continue",
+                "thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k1}\n\
+                 thermo_modify norm no flush yes\n\
+                 thermo {}",
                 st.check_every
             );
-        }
-        let _ = writeln!(s, "run {}", st.max_steps);
-        // The thermo line at the run's last step invokes the computes v_ok reads.
-        let _ = writeln!(
-            s,
-            "if \"${{ok{k1}}} > 0.5\" then \"variable status string equilibrium\" else \"variable status string time-limit\""
-        );
-        if !full_time {
-            s.push_str("unfix halt\n");
+            if !full_time {
+                let _ = writeln!(
+                    s,
+                    "fix halt all halt {} v_ok{k1} > 0.5 error continue",
+                    st.check_every
+                );
+            }
+            let _ = writeln!(s, "run {}", st.max_steps);
+            // The thermo line at the run's last step invokes the computes v_ok reads.
+            let _ = writeln!(
+                s,
+                "if \"${{ok{k1}}} > 0.5\" then \"variable status string equilibrium\" else \"variable status string time-limit\""
+            );
+            if !full_time {
+                s.push_str("unfix halt\n");
+            }
         }
         if matches!(st.kind, StageKind::Compress { .. }) {
             s.push_str("unfix baro\n");
@@ -361,6 +443,98 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
          print \"${status}\" file final.status\n",
     );
     s
+}
+
+/// A stage with a final relaxation (`relax`, engine/src/run/relax.rs), as far as LAMMPS can
+/// say it. Phase A runs the law as it is in chunks of `settle_time` and switches when, at the end
+/// of a chunk, the number of contacts (`compute contact/atom`: touching pairs, not the list) is
+/// the one at the end of the previous chunk and the kinetic (without one-contact grains with
+/// `free_rollers`) and stress criteria hold. Phase B damps the velocities with `fix langevin` at
+/// T = 0 (drag −m v γ; spins at LAMMPS's rotational rate) and adds the tangential dashpot, until
+/// the criteria hold over the window: runs stopped by `fix halt` when they first hold, then a
+/// window-long run stopped when they break.
+fn relaxed_stage(
+    s: &mut String,
+    start: &Start,
+    st: &super::Stage,
+    k: usize,
+    relax: Relax,
+    code: Code,
+) {
+    let tol = st.tolerances;
+    let n = start.n();
+    let settle = ((relax.settle_time / st.dt).ceil() as u64).max(st.check_every);
+    let window = ((st.window / st.dt).ceil() as u64).max(st.check_every);
+    let every = st.check_every;
+    let mut rest = vec![format!("(c_eks{k}/{n}<{})", num(tol.kinetic_per_grain))];
+    if let StageKind::Compress { pressure } = st.kind {
+        for a in 1..=start.dimension {
+            rest.push(format!(
+                "(abs(c_pvir[{a}]-{})<{})",
+                num(pressure),
+                num(tol.stress)
+            ));
+        }
+    }
+    let settling_ek = if relax.free_rollers {
+        "v_ek*(c_cn!=1)"
+    } else {
+        "v_ek"
+    };
+    let damped = pair_coeff(start.law(), st.kappa, st.mu, code, relax.tangential_zeta);
+    let plain = pair_coeff(start.law(), st.kappa, st.mu, code, 0.0);
+    let _ = write!(
+        s,
+        "# Final relaxation (relax = {{ damping = {gamma}, tangential_zeta = {zt}, settle_time = {st_time}, free_rollers = {fr} }}).\n\
+         # Phase A: the law as it is, in chunks of settle_time ({settle} steps), until the contact count is\n\
+         # unchanged over a chunk with the kinetic{fr_note} and stress criteria met.\n\
+         variable end{k} equal $(step+{max})\n\
+         compute ncs{k} all reduce sum c_cn\n\
+         variable ncnt{k} equal c_ncs{k}\n\
+         variable eks{k} atom {settling_ek}\n\
+         compute eks{k} all reduce sum v_eks{k}\n\
+         variable rest{k} equal {rest}\n\
+         variable nprev{k} equal -1\n\
+         thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k} v_ncnt{k} v_rest{k}\n\
+         thermo_modify norm no flush yes\n\
+         thermo {every}\n\
+         label settle{k}\n\
+         run {settle}\n\
+         if \"${{ncnt{k}}} == ${{nprev{k}}} && ${{rest{k}}} > 0.5\" then \"jump SELF damp{k}\"\n\
+         variable nprev{k} equal ${{ncnt{k}}}\n\
+         if \"$(step) < ${{end{k}}}\" then \"jump SELF settle{k}\"\n\
+         variable status string time-limit\n\
+         jump SELF done{k}\n\
+         # Phase B: drag -m v gamma on every grain (fix langevin at T = 0) and the tangential dashpot,\n\
+         # until the criteria hold over the window ({window} steps).\n\
+         label damp{k}\n\
+         print \"grainbench: damping on at step $(step), time $(time)\"\n\
+         fix relax{k} all langevin 0.0 0.0 {damp} 1 omega yes\n\
+         {damped}\n\
+         label hold{k}\n\
+         if \"$(step) >= ${{end{k}}}\" then \"variable status string time-limit\" \"jump SELF undamp{k}\"\n\
+         fix halt all halt {every} v_ok{k} > 0.5 error continue\n\
+         run ${{end{k}}} upto\n\
+         unfix halt\n\
+         if \"${{ok{k}}} < 0.5\" then \"variable status string time-limit\" \"jump SELF undamp{k}\"\n\
+         fix halt all halt {every} v_ok{k} < 0.5 error continue\n\
+         run {window}\n\
+         unfix halt\n\
+         if \"${{ok{k}}} > 0.5\" then \"variable status string equilibrium\" \"jump SELF undamp{k}\"\n\
+         jump SELF hold{k}\n\
+         label undamp{k}\n\
+         unfix relax{k}\n\
+         {plain}\n\
+         label done{k}\n",
+        gamma = num(relax.damping),
+        zt = num(relax.tangential_zeta),
+        st_time = num(relax.settle_time),
+        fr = relax.free_rollers,
+        fr_note = if relax.free_rollers { " (one-contact grains left out)" } else { "" },
+        max = st.max_steps,
+        rest = rest.join("*"),
+        damp = num(1.0 / relax.damping),
+    );
 }
 
 #[cfg(test)]
@@ -406,5 +580,42 @@ mod tests {
         let (model, e) = damping(Code::Lammps, c, true);
         assert_eq!(model, "tsuji");
         assert!(e < 0.0 && (tsuji_coefficient(e) - c).abs() < 1e-9);
+    }
+
+    /// Adhesive scene (issue 14): LAMMPS 2025 gets the exact GRC07 attraction by lepton/sphere,
+    /// a capped deform/pressure servo and the relaxation loop; LAMMPS 2021 refuses it.
+    #[test]
+    fn adhesive_deck_overlays_lepton_and_relaxes() {
+        let scene = grainbench_engine::library::scene("xcode-cohesive-smoke")
+            .unwrap()
+            .unwrap();
+        let start = Start::of(&scene).unwrap();
+        let deck = super::super::deck(&start, Code::Lammps2025).unwrap();
+        let input = &deck.files[0].1;
+        for line in [
+            "pair_style hybrid/overlay granular lepton/sphere",
+            "pair_coeff * * granular hooke 1e4",
+            "pair_coeff * * lepton/sphere \"select(step(-h)",
+            "fix baro all deform/pressure 1 x pressure 1e-2 1e-1 y pressure 1e-2 1e-1 max/rate 5e-2",
+            "label settle1",
+            "fix relax1 all langevin 0.0 0.0 1 1 omega yes",
+            // ζ_t/ζ = 0.5/0.8 with K_T = K_N.
+            "tangential linear_history 1e4 6.25e-1 5e-1",
+            "variable eks1 atom v_ek*(c_cn!=1)",
+        ] {
+            assert!(input.contains(line), "missing `{line}`");
+        }
+        // Distant attractions are dumped (no `cutoff radius`).
+        assert!(input.contains("compute pl all pair/local dist fx fy fz p1 p2 p3\n"));
+        assert!(!input.contains("press/berendsen"));
+        assert!(deck
+            .deviations
+            .iter()
+            .any(|d| d.starts_with("stress-control: fix deform/pressure")));
+        let refusal = super::super::deck(&start, Code::Lammps).unwrap_err();
+        assert!(refusal
+            .missing
+            .iter()
+            .any(|(f, _)| *f == super::super::Feature::Adhesion));
     }
 }

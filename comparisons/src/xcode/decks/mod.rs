@@ -22,7 +22,7 @@ pub use capability::{features, Feature, Support};
 
 use grainbench_engine::geometry::{Dim, VectorOps as _, D2, D3};
 use grainbench_engine::run::{prepared_grains, time_step_for, Grains};
-use grainbench_engine::scene::{Criteria, ForceScale, Law, Mu, Scene, Step};
+use grainbench_engine::scene::{Criteria, ForceScale, Law, Mu, Relax, Scene, Step};
 use std::fmt;
 
 /// What a DEM stage asks of an external code, in absolute reduced units.
@@ -42,6 +42,10 @@ pub struct Stage {
     pub tolerances: Tolerances,
     /// Steps between checks of the criteria.
     pub check_every: u64,
+    /// Final relaxation of the stage (issue 12), if any.
+    pub relax: Option<Relax>,
+    /// Time over which the criteria must hold before the stage ends (0: one check).
+    pub window: f64,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -252,6 +256,8 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
             dt,
             tolerances: Tolerances::of(&step.criteria(), pressure),
             check_every: scene.numerics.check_every,
+            relax: step.relax(),
+            window: step.criteria().window,
         });
     }
     let n = grains.s.len();
@@ -302,6 +308,11 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
     let deviations: Vec<String> = feats
         .iter()
         .filter_map(|f| match capability::support(code, *f) {
+            Support::Approximate(_)
+                if *f == Feature::StressControl && start.cohesive() && code == Code::Lammps2025 =>
+            {
+                Some(lammps::ADHESIVE_STRESS_CONTROL.to_string())
+            }
             Support::Approximate(why) => Some(format!("{}: {why}", f.key())),
             _ => None,
         })

@@ -7,6 +7,8 @@
 //! * `final.contacts`: `dump local` whose first nine columns are, in this order,
 //!   `patom1 patom2` (`compute property/local`) and `dist fx fy fz p1 p2 p3`
 //!   (`compute pair/local … cutoff radius` of `pair_style granular`), whatever their names.
+//!   Adhesive decks (`hybrid/overlay granular lepton/sphere`) dump every pair within the
+//!   cut-off; rows whose six force columns are all zero (no interaction) are dropped.
 //!   `fx fy fz` is the normal force on atom 1 (along x1 − x2, its sign the repulsive one), `p1 p2 p3`
 //!   the tangential force on atom 1;
 //! * `final.status`: one word (`equilibrium`, `time-limit`), optional.
@@ -33,6 +35,10 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
         ));
     }
     for r in &pairs.rows {
+        // Adhesive decks dump every pair within the cut-off: keep those that carry a force.
+        if meta.cohesive && r[3..9].iter().all(|&x| x == 0.0) {
+            continue;
+        }
         let atom = |k: usize| {
             index.get(&(r[k].round() as i64)).copied().ok_or_else(|| {
                 ImportError::new(
