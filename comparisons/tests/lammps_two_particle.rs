@@ -481,4 +481,43 @@ criteria = {{ preset = "grc07" }}
         seen += 1;
     }
     assert_eq!(seen, 7);
+
+    // Tangential force through the overlay (the dump's p1..p3): heavy disks (×1e4) sliding
+    // past each other at u along y for k steps at overlap 5e-4: T on disk 2 = −K_T·u·k·dt.
+    let (u, k, dt) = (1e-2, 100u64, 1e-4);
+    let mut st = disks(-5e-4, 0.0);
+    st.mass = vec![1e4 * m1, 1e4 * m2];
+    st.inertia = vec![1e4 * 0.125 * m1 * d1 * d1, 1e4 * 0.125 * m2 * d2 * d2];
+    st.velocity = vec![vec![0.0, -u / 2.0], vec![0.0, u / 2.0]];
+    st.stages[0].max_steps = k;
+    st.stages[0].max_time = k as f64 * dt;
+    st.stages[0].dt = dt;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let deck = decks::deck(&st, code).expect("deck");
+    for (name, text) in &deck.files {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    let out = Command::new(code.find().expect("checked by common::present"))
+        .args(&deck.args)
+        .args(["-screen", "none"])
+        .current_dir(dir.path())
+        .output()
+        .expect("lmp runs");
+    let log = std::fs::read_to_string(dir.path().join("log.lammps")).unwrap_or_default();
+    assert!(out.status.success(), "lmp failed:\n{log}");
+    let meta = Meta::read(dir.path()).unwrap();
+    let raw = import::lammps::read_dir(dir.path(), &meta).expect("read");
+    assert_eq!(raw.contacts.len(), 1, "{:?}", raw.contacts);
+    let c = &raw.contacts[0];
+    let t2 = if (c.i, c.j) == (0, 1) {
+        c.tangential[1]
+    } else {
+        -c.tangential[1]
+    };
+    let want = -kn * u * k as f64 * dt;
+    eprintln!(
+        "{code} adhesion tangential: {t2}, ours {want}, rel {:.2e}",
+        rel(t2, want)
+    );
+    assert!(rel(t2, want) < 1e-3, "T {t2} vs {want}");
 }

@@ -175,8 +175,11 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code, zeta_t: f64) -> String 
             let granular = format!("hooke {} {} {t} damping {model}", num(kappa), num(e));
             match cohesion {
                 None => format!("pair_coeff * * {granular}"),
+                // lepton/sphere first: hybrid/overlay's copy_svector (LAMMPS 2025) passes on
+                // the extra values (`compute pair/local p1 p2 p3`, the tangential force) of the
+                // last sub-style given to a type pair only.
                 Some(c) => format!(
-                    "pair_coeff * * granular {granular}\npair_coeff * * lepton/sphere \"{}\"",
+                    "pair_coeff * * lepton/sphere \"{}\"\npair_coeff * * granular {granular}",
                     lepton_attraction(1.0, c.d0)
                 ),
             }
@@ -184,12 +187,18 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code, zeta_t: f64) -> String 
     }
 }
 
-/// Largest strain rate (1/T0) that sets the gain of the adhesive decks' servo: GRC07 §III.B.1's
-/// cap; a higher gain makes the first-order servo chatter on a stiff packing.
-const MAX_SERVO_RATE: f64 = 0.05;
+/// Gain g of the adhesive decks' first-order servo, per-axis rate g·(σ_αα − P)/P: 2·cap (full
+/// cap beyond 50 % of the target), lowered to keep the loop stable. Each step the affine
+/// remap changes the stress by B·rate·dt with B ≈ κ/4 (measured on the smoke packing: a step
+/// at the cap moved σ by 0.055 at κ = 1e4); g·B·dt/P > 2 makes the box flip between two
+/// sizes every step with σ ≈ P ± 0.028 (seen), so g ≤ P/(2 κ dt) (B taken as κ/4, 4× margin on the
+/// stability bound B·g·dt/P < 2).
+fn servo_gain(pressure: f64, st: &super::Stage) -> f64 {
+    (2.0 * st.max_strain_rate).min(pressure / (2.0 * st.kappa * st.dt))
+}
 
 /// Stress control of adhesive decks (replaces the matrix's Berendsen line in their header).
-pub const ADHESIVE_STRESS_CONTROL: &str = "stress-control: fix deform/pressure (LAMMPS 2025), per-axis strain rate 2·min(cap, 0.05/T0)·(σ_αα − P)/P on the virial stress, at most the cap (Berendsen's unbounded rate collapses the cell when an adhesive packing's virial swings to ±100 P), no cell mass";
+pub const ADHESIVE_STRESS_CONTROL: &str = "stress-control: fix deform/pressure (LAMMPS 2025), per-axis strain rate g·(σ_αα − P)/P on the virial stress, g = min(2·cap, P/(2κ dt)) for a stable loop, at most the cap (Berendsen's unbounded rate collapses the cell when an adhesive packing's virial swings to ±100 P), no cell mass";
 
 /// The LAMMPS deck of `start` for `code` (either LAMMPS version).
 pub fn deck(start: &Start, code: Code, deviations: &[String]) -> Deck {
@@ -355,22 +364,21 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
                 // An adhesive packing's virial swings to ±100 P while grains collide and
                 // stick: Berendsen's rate (P − σ)/(3Bτ) has no bound and collapses the cell.
                 // LAMMPS 2025's deform/pressure caps it: per axis, rate = g(σ_αα − P)/P at
-                // most the cap, g = 2·min(cap, 0.05/T0) (full cap beyond 50 % of the target;
-                // an uncapped GRC07 method-1 stage, cap 1000/T0, gets the 0.05/T0 gain).
+                // most the cap, g from [`servo_gain`].
                 let axes = ["x", "y", "z"][..start.dimension]
                     .iter()
                     .map(|a| {
                         format!(
                             "{a} pressure {} {}",
                             num(pressure),
-                            num(2.0 * st.max_strain_rate.min(MAX_SERVO_RATE))
+                            num(servo_gain(pressure, st))
                         )
                     })
                     .collect::<Vec<_>>()
                     .join(" ");
                 let _ = writeln!(
                     s,
-                    "# Stress control: fix deform/pressure, per-axis strain rate 2·cap·(σ_αα − P)/P, at most the cap\n\
+                    "# Stress control: fix deform/pressure, per-axis strain rate g·(σ_αα − P)/P, g = min(2 cap, P/(2 κ dt)), at most the cap\n\
                      fix baro all deform/pressure 1 {axes} max/rate {} normalize/pressure yes remap x\n\
                      fix_modify baro press pvir",
                     num(st.max_strain_rate)
@@ -596,7 +604,7 @@ mod tests {
             "pair_style hybrid/overlay granular lepton/sphere",
             "pair_coeff * * granular hooke 1e4",
             "pair_coeff * * lepton/sphere \"select(step(-h)",
-            "fix baro all deform/pressure 1 x pressure 1e-2 1e-1 y pressure 1e-2 1e-1 max/rate 5e-2",
+            "fix baro all deform/pressure 1 x pressure 1e-2 2.2203770805215026e-3 y pressure 1e-2 2.2203770805215026e-3 max/rate 2e-3",
             "label settle1",
             "fix relax1 all langevin 0.0 0.0 1 1 omega yes",
             // ζ_t/ζ = 0.5/0.8 with K_T = K_N.
