@@ -176,7 +176,7 @@ impl Analysis {
     /// `phi`, `z`, `z_star`, `x0`, `xk2`…`xk12` (x_k, variant I), `xk2_II`…`xk12_II`,
     /// `mean_N`, `Z2`, `Z5_3`, `X1`, `M1`, `M2`, `N_2`, `X1_2`, `M1_2`, `M2_2`, `N_3`, `X1_3`,
     /// `M1_3`, `M2_3`, `Q4`, `Q6`, `Q4loc`, `Q6loc`, `Z_bond`, `Z_cr`, `Q6loc_cr`, `x_cr`,
-    /// `n_cr`, `z_plus`, `z_minus`, `z_zero`, `pressure` (measured).
+    /// `n_cr`, `z_plus`, `z_minus`, `z_zero`, `clusters`, `pressure` (measured).
     pub fn metric_values(&self) -> Vec<(String, f64)> {
         let mut v: Vec<(String, f64)> = Vec::new();
         let mut put = |k: &str, x: Option<f64>| {
@@ -232,6 +232,7 @@ impl Analysis {
             put("z_plus", Some(s.z_plus));
             put("z_minus", Some(s.z_minus));
             put("z_zero", Some(s.z_zero));
+            put("clusters", Some(s.clusters as f64));
         }
         put("pressure", self.pressure.measured);
         v
@@ -248,6 +249,9 @@ pub struct CohesiveSplit {
     pub z_zero: f64,
     /// Interactions with a positive gap (distant attractions, GRC07 §III.A).
     pub distant: usize,
+    /// Clusters: connected groups of grains linked by interactions, among the grains with at
+    /// least one (1 for a packing that holds together; GRC07 §III.B method 2 aggregates to 1).
+    pub clusters: usize,
     /// N+ and N+^(2): mean and quadratic mean of repulsive forces.
     pub mean_repulsive: Option<f64>,
     pub rms_repulsive: Option<f64>,
@@ -322,6 +326,7 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
             z_minus: per_grain(att.len()),
             z_zero: per_grain(nc - rep.len() - att.len()),
             distant: backbone.iter().filter(|c| c.gap > 0.0).count(),
+            clusters: clusters(n, &pairs),
             mean_repulsive: mean(rep.iter().copied()),
             rms_repulsive: rms(&rep),
             mean_attractive: mean(att.iter().copied()),
@@ -434,4 +439,29 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         bond_order,
         pressure,
     }
+}
+
+/// Connected groups of grains linked by `pairs`, among the `n` grains those that appear in a
+/// pair (union–find).
+fn clusters(n: usize, pairs: &[(usize, usize)]) -> usize {
+    fn root(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let mut parent: Vec<usize> = (0..n).collect();
+    let mut linked = vec![false; n];
+    let mut merges = 0;
+    for &(i, j) in pairs {
+        linked[i] = true;
+        linked[j] = true;
+        let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+        if a != b {
+            parent[a] = b;
+            merges += 1;
+        }
+    }
+    linked.iter().filter(|&&l| l).count() - merges
 }

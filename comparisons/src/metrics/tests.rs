@@ -225,6 +225,8 @@ fn cohesive_split() {
     assert_close!(s.z_zero, 0.75, 1e-15);
     assert_close!(s.z_plus + s.z_minus + s.z_zero, a.z, 1e-15);
     assert_eq!(s.distant, 1);
+    // Grains 0–6 in one chain; the isolated grain 7 is no cluster.
+    assert_eq!(s.clusters, 1);
     assert_eq!(s.mean_repulsive, Some(0.5));
     assert_close!(s.mean_attractive.unwrap(), 0.4, 1e-15);
     assert_close!(s.rms_attractive.unwrap(), (0.17f64).sqrt(), 1e-15);
@@ -405,7 +407,7 @@ fn canonical_keys() -> Vec<String> {
         [
             "mean_N", "Z2", "Z5_3", "X1", "M1", "M2", "N_2", "X1_2", "M1_2", "M2_2", "N_3", "X1_3",
             "M1_3", "M2_3", "Q4", "Q6", "Q4loc", "Q6loc", "Z_bond", "Z_cr", "Q6loc_cr", "x_cr",
-            "n_cr", "z_plus", "z_minus", "z_zero", "pressure",
+            "n_cr", "z_plus", "z_minus", "z_zero", "clusters", "pressure",
         ]
         .map(String::from),
     );

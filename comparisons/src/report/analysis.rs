@@ -122,6 +122,11 @@ pub fn to_markdown(a: &Analysis) -> String {
         row("z−", sig6(s.z_minus), "attractive");
         row("z0", sig6(s.z_zero), "|N| ≤ threshold");
         row("distant pairs", s.distant.to_string(), "gap > 0");
+        row(
+            "clusters",
+            s.clusters.to_string(),
+            "groups of grains linked by interactions",
+        );
         row("N+", opt(s.mean_repulsive), "mean repulsive force");
         row("N+^(2)", opt(s.rms_repulsive), "quadratic mean");
         row("N−", opt(s.mean_attractive), "mean |attractive force|");

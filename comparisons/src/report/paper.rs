@@ -121,6 +121,7 @@ pub const METRIC_KEYS: &[(&str, &str)] = &[
     ("z_plus", "coordination number of repulsive contacts (GRC07 T.VI)"),
     ("z_minus", "coordination number of attractive contacts (GRC07 T.VI)"),
     ("z_zero", "coordination number of contacts below 1e-4 F0 (GRC07 T.VI)"),
+    ("clusters", "clusters of grains linked by interactions"),
     ("d_F", "fractal dimension from the fit of I(k) by GRC07 (28)"),
     ("xi", "fractal blob size ξ/a from GRC07 (28)"),
     // Quantities outside the fixed list.
