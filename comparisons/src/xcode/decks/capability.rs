@@ -265,7 +265,9 @@ pub fn support(code: Code, f: Feature) -> Support {
         // within 1e-3: Hertz normal force, damping (2021: Tsuji's negative root; 2025: Tsuji's
         // root above 1 at ζ = 0.98, equal and unequal masses), Mindlin K_T, rescale on unloading
         // (3D spheres); hooke K_N, damping (2025: coeff_restitution), linear_history K_T (2D
-        // disks). Disk inertia (nve/sphere disc) is not tested.
+        // disks); 2025 only: the GRC07 adhesion by lepton/sphere (normal force at seven gaps and
+        // overlaps, with damping, and K_T through the overlay). Disk inertia (nve/sphere disc)
+        // is not tested.
         Code::Lammps | Code::Lammps2025 => match f {
             F::Coulomb => Approximate("Coulomb cap uses the total normal force (damping included)"),
             F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
