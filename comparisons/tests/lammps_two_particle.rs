@@ -91,8 +91,9 @@ fn run(start: &Start, code: Code) -> (f64, Vec<f64>, Vec<f64>) {
     (n, t, f)
 }
 
-/// [`run`], and the final overlap.
-fn run_h(start: &Start, code: Code) -> (f64, Vec<f64>, Vec<f64>, f64) {
+/// Writes the deck of `start` for `code` into a temporary directory, runs it, and reads its
+/// final state back: (directory, what the reader found, the LAMMPS log).
+fn run_deck(start: &Start, code: Code) -> (tempfile::TempDir, import::Raw, String) {
     let dir = tempfile::tempdir().expect("tempdir");
     let deck = decks::deck(start, code).expect("deck");
     for (name, text) in &deck.files {
@@ -108,6 +109,12 @@ fn run_h(start: &Start, code: Code) -> (f64, Vec<f64>, Vec<f64>, f64) {
     assert!(out.status.success(), "lmp failed:\n{log}");
     let meta = Meta::read(dir.path()).unwrap();
     let raw = import::lammps::read_dir(dir.path(), &meta).expect("read");
+    (dir, raw, log)
+}
+
+/// [`run`], and the final overlap.
+fn run_h(start: &Start, code: Code) -> (f64, Vec<f64>, Vec<f64>, f64) {
+    let (dir, raw, log) = run_deck(start, code);
     assert_eq!(raw.contacts.len(), 1, "one contact:\n{log}");
     let c = &raw.contacts[0];
     let (n, t) = if (c.i, c.j) == (0, 1) {
@@ -454,21 +461,7 @@ criteria = {{ preset = "grc07" }}
         (9e-4, 0.0),
         (1.2e-3, 0.0),
     ] {
-        let dir = tempfile::tempdir().expect("tempdir");
-        let deck = decks::deck(&disks(gap, v), code).expect("deck");
-        for (name, text) in &deck.files {
-            std::fs::write(dir.path().join(name), text).unwrap();
-        }
-        let out = Command::new(code.find().expect("checked by common::present"))
-            .args(&deck.args)
-            .args(["-screen", "none"])
-            .current_dir(dir.path())
-            .output()
-            .expect("lmp runs");
-        let log = std::fs::read_to_string(dir.path().join("log.lammps")).unwrap_or_default();
-        assert!(out.status.success(), "lmp failed:\n{log}");
-        let meta = Meta::read(dir.path()).unwrap();
-        let raw = import::lammps::read_dir(dir.path(), &meta).expect("read");
+        let (_dir, raw, _) = run_deck(&disks(gap, v), code);
         let want = ours(gap, v);
         let got = raw.contacts.first().map(|c| c.normal).unwrap_or(0.0);
         eprintln!("{code} adhesion: gap {gap:e}, v {v}: N {got}, ours {want}");
@@ -492,21 +485,7 @@ criteria = {{ preset = "grc07" }}
     st.stages[0].max_steps = k;
     st.stages[0].max_time = k as f64 * dt;
     st.stages[0].dt = dt;
-    let dir = tempfile::tempdir().expect("tempdir");
-    let deck = decks::deck(&st, code).expect("deck");
-    for (name, text) in &deck.files {
-        std::fs::write(dir.path().join(name), text).unwrap();
-    }
-    let out = Command::new(code.find().expect("checked by common::present"))
-        .args(&deck.args)
-        .args(["-screen", "none"])
-        .current_dir(dir.path())
-        .output()
-        .expect("lmp runs");
-    let log = std::fs::read_to_string(dir.path().join("log.lammps")).unwrap_or_default();
-    assert!(out.status.success(), "lmp failed:\n{log}");
-    let meta = Meta::read(dir.path()).unwrap();
-    let raw = import::lammps::read_dir(dir.path(), &meta).expect("read");
+    let (_dir, raw, _) = run_deck(&st, code);
     assert_eq!(raw.contacts.len(), 1, "{:?}", raw.contacts);
     let c = &raw.contacts[0];
     let t2 = if (c.i, c.j) == (0, 1) {

@@ -200,6 +200,19 @@ fn servo_gain(pressure: f64, st: &super::Stage) -> f64 {
 /// Stress control of adhesive decks (replaces the matrix's Berendsen line in their header).
 pub const ADHESIVE_STRESS_CONTROL: &str = "stress-control: fix deform/pressure (LAMMPS 2025), per-axis strain rate g·(σ_αα − P)/P on the virial stress, g = min(2·cap, P/(2κ dt)) for a stable loop, at most the cap (Berendsen's unbounded rate collapses the cell when an adhesive packing's virial swings to ±100 P), no cell mass";
 
+/// The deviation line of feature `f` (matrix reason `why`) in an adhesive LAMMPS 2025 deck,
+/// whose stress control is deform/pressure, not Berendsen.
+pub fn adhesive_deviation(f: super::Feature, why: &str) -> String {
+    match f {
+        super::Feature::StressControl => ADHESIVE_STRESS_CONTROL.to_string(),
+        _ => format!(
+            "{}: {}",
+            f.key(),
+            why.replace("Berendsen dilation", "deform/pressure box change")
+        ),
+    }
+}
+
 /// The LAMMPS deck of `start` for `code` (either LAMMPS version).
 pub fn deck(start: &Start, code: Code, deviations: &[String]) -> Deck {
     Deck {

@@ -305,25 +305,12 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
             missing,
         });
     }
+    let adhesive_lammps = start.cohesive() && code == Code::Lammps2025;
     let deviations: Vec<String> = feats
         .iter()
         .filter_map(|f| match capability::support(code, *f) {
-            // Adhesive LAMMPS 2025 decks control the stress with deform/pressure.
-            Support::Approximate(_)
-                if *f == Feature::StressControl && start.cohesive() && code == Code::Lammps2025 =>
-            {
-                Some(lammps::ADHESIVE_STRESS_CONTROL.to_string())
-            }
-            Support::Approximate(why)
-                if *f == Feature::EquilibriumCriteria
-                    && start.cohesive()
-                    && code == Code::Lammps2025 =>
-            {
-                Some(format!(
-                    "{}: {}",
-                    f.key(),
-                    why.replace("Berendsen dilation", "deform/pressure box change")
-                ))
+            Support::Approximate(why) if adhesive_lammps => {
+                Some(lammps::adhesive_deviation(*f, why))
             }
             Support::Approximate(why) => Some(format!("{}: {why}", f.key())),
             _ => None,
