@@ -21,7 +21,7 @@ use std::time::Duration;
 
 fn metrics(c: &mut Criterion) {
     let n = 4000;
-    let gas = random_gas::<D3>(n, 1.0, 0.36, 7).expect("random gas");
+    let gas = random_gas::<D3>(n, 1.0, None, 0.36, 7).expect("random gas");
     let shrink = (0.36f64 / 0.6).powf(1.0 / 3.0);
     let lengths: Vec<f64> = (0..3).map(|a| gas.l[a] * shrink).collect();
     let position: Vec<Vec<f64>> = gas

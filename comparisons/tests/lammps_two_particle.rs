@@ -372,12 +372,23 @@ criteria = {{ preset = "ar07" }}
 /// −F0(1 − h/D0) for 0 ≤ h ≤ D0, nothing beyond), to 1e-9 F0.
 #[test]
 fn lammps_2025_two_particle_adhesion() {
+    adhesion(Code::Lammps2025, 1e-9);
+}
+
+/// The same in LAMMPS 2021: `hybrid/overlay granular table`, the two diameters as two atom
+/// types with one attraction table per type pair (decks/lammps_table.rs), to 1e-6 F0 (linear
+/// interpolation in r² between table points; the kinks are points).
+#[test]
+fn lammps_two_particle_adhesion_tables() {
+    adhesion(Code::Lammps, 1e-6);
+}
+
+fn adhesion(code: Code, tolerance: f64) {
     use grainbench_engine::contact::linear::{Adhesion, Linear};
     use grainbench_engine::contact::slider::{Coulomb, NoRolling};
     use grainbench_engine::contact::{ContactLaw, Pair};
     use grainbench_engine::geometry::{Dim, D2};
     type V2 = <D2 as Dim>::V;
-    let code = Code::Lammps2025;
     if !common::present(code) {
         return;
     }
@@ -456,8 +467,11 @@ criteria = {{ preset = "grc07" }}
         (-1e-3, 0.0),
         (-2e-4, 0.0),
         (-2e-4, 0.05),
+        (0.0, 0.0),
         (1e-4, 0.0),
+        (3.3e-4, 0.0),
         (5e-4, 0.0),
+        (7.77e-4, 0.0),
         (9e-4, 0.0),
         (1.2e-3, 0.0),
     ] {
@@ -468,12 +482,12 @@ criteria = {{ preset = "grc07" }}
         assert!(raw.contacts.len() <= 1, "{:?}", raw.contacts);
         assert_eq!(raw.contacts.len(), usize::from(gap <= d0), "gap {gap}");
         assert!(
-            (got - want).abs() < 1e-9,
+            (got - want).abs() < tolerance,
             "gap {gap}, v {v}: {got} vs {want}"
         );
         seen += 1;
     }
-    assert_eq!(seen, 7);
+    assert_eq!(seen, 10);
 
     // Tangential force through the overlay (the dump's p1..p3): heavy disks (×1e4) sliding
     // past each other at u along y for k steps at overlap 5e-4: T on disk 2 = −K_T·u·k·dt.

@@ -14,24 +14,34 @@ pub struct Gas<D: Dim> {
     pub l: D::V,
 }
 
-/// Diameters uniform in [d_min, 1] (GRC07 §II.A with d_min = 1/2; monodisperse when 1).
-pub fn diameters(n: usize, d_min: f64, rng: &mut ChaCha8Rng) -> Vec<f64> {
+/// Diameters uniform in [d_min, 1] (GRC07 §II.A with d_min = 1/2; monodisperse when 1), or,
+/// with `classes = Some(K)`, uniform among the K diameters d_min + (1 − d_min) k/(K − 1).
+pub fn diameters(n: usize, d_min: f64, classes: Option<usize>, rng: &mut ChaCha8Rng) -> Vec<f64> {
     (0..n)
-        .map(|_| {
-            if d_min >= 1.0 {
-                1.0
-            } else {
-                rng.gen_range(d_min..=1.0)
-            }
+        .map(|_| match classes {
+            _ if d_min >= 1.0 => 1.0,
+            Some(k) if k >= 2 => class_diameter(rng.gen_range(0..k), k, d_min),
+            _ => rng.gen_range(d_min..=1.0),
         })
         .collect()
 }
 
+/// Diameter of class `c` of `k` spanning [d_min, 1].
+pub fn class_diameter(c: usize, k: usize, d_min: f64) -> f64 {
+    d_min + (1.0 - d_min) * c as f64 / (k - 1) as f64
+}
+
 /// Places `n` grains at random, without overlap, in a cubic (square) cell of solid fraction
 /// `phi`. Fails with a message if the placement stalls.
-pub fn random_gas<D: Dim>(n: usize, d_min: f64, phi: f64, seed: u64) -> Result<Gas<D>, String> {
+pub fn random_gas<D: Dim>(
+    n: usize,
+    d_min: f64,
+    classes: Option<usize>,
+    phi: f64,
+    seed: u64,
+) -> Result<Gas<D>, String> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut diameter = diameters(n, d_min, &mut rng);
+    let mut diameter = diameters(n, d_min, classes, &mut rng);
     // Largest first: they are the hardest to place.
     diameter.sort_by(|a, b| b.total_cmp(a));
     let solid: f64 = diameter.iter().map(|&d| D::grain_volume(d)).sum();
@@ -174,17 +184,31 @@ mod tests {
 
     #[test]
     fn gas_reaches_fraction_without_overlap() {
-        let g = random_gas::<D2>(400, 0.5, 0.5, 7).unwrap();
+        let g = random_gas::<D2>(400, 0.5, None, 0.5, 7).unwrap();
         no_overlap(&g);
         let solid: f64 = g.diameter.iter().map(|&d| D2::grain_volume(d)).sum();
         assert!((solid / D2::product(g.l) - 0.5).abs() < 1e-12);
-        let g3 = random_gas::<D3>(300, 1.0, 0.3, 7).unwrap();
+        let g3 = random_gas::<D3>(300, 1.0, None, 0.3, 7).unwrap();
         no_overlap(&g3);
     }
 
     #[test]
+    fn classes_give_k_diameters_each_drawn() {
+        let g = random_gas::<D2>(2000, 0.5, Some(5), 0.3, 3).unwrap();
+        no_overlap(&g);
+        for k in 0..5 {
+            let d = class_diameter(k, 5, 0.5);
+            let count = g.diameter.iter().filter(|&&x| x == d).count();
+            // 400 expected per class; 5 binomial s.d. ≈ 90.
+            assert!((310..=490).contains(&count), "class {k} (d = {d}): {count}");
+        }
+        assert_eq!(class_diameter(0, 5, 0.5), 0.5);
+        assert_eq!(class_diameter(4, 5, 0.5), 1.0);
+    }
+
+    #[test]
     fn too_dense_gas_is_refused() {
-        let e = random_gas::<D3>(200, 1.0, 0.6, 1).err().unwrap();
+        let e = random_gas::<D3>(200, 1.0, None, 0.6, 1).err().unwrap();
         assert!(e.contains("initial.packing_fraction"), "{e}");
     }
 }

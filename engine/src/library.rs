@@ -11,6 +11,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "default",
     "xcode-smoke",
     "xcode-cohesive-smoke",
+    "xcode-cohesive-classes-smoke",
     "ar07-A-n1372",
     "ar07-D-10kPa-n1372",
     "ar07-A",

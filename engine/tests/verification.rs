@@ -646,7 +646,7 @@ fn elastic_gas_drift<D: Dim, L: ContactLaw<D>>(
     steps: usize,
     potential: impl Fn(f64, f64) -> f64,
 ) -> (f64, usize) {
-    let gas = random_gas::<D>(200, d_min, phi, 7).unwrap();
+    let gas = random_gas::<D>(200, d_min, None, phi, 7).unwrap();
     let cell = Cell::new(gas.l, 1.0);
     let mut sys = System::new(law, cell, gas.s, &gas.diameter, 0.3);
     sys.check_cell().unwrap();

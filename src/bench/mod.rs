@@ -422,7 +422,10 @@ fn run_external(
     )?;
     run.peak_rss_kib = Some(done.peak_rss_kib());
     run.wall_seconds = Some(done.wall_seconds);
-    let throughput_only = deck.files.iter().any(|(n, _)| n == lammps_table::TABLE);
+    let throughput_only = deck
+        .files
+        .iter()
+        .any(|(n, _)| n == lammps_table::BENCH_TABLE);
     if throughput_only && done.status.is_some_and(|s| s.success()) {
         // No final state to read back: steps and status from the log.
         if r.version.is_none() {

@@ -1133,7 +1133,7 @@ mod tests {
 
     /// Disks with diameters uniform in [d_min, 1] (GRC07 §II.A), mass d², random gas at Φ.
     fn disk_system(n: usize, d_min: f64, phi: f64, seed: u64) -> HardSpheres<D2> {
-        let gas = crate::init::random_gas::<D2>(n, d_min, phi, seed).unwrap();
+        let gas = crate::init::random_gas::<D2>(n, d_min, None, phi, seed).unwrap();
         let mass: Vec<f64> = gas.diameter.iter().map(|d| d * d).collect();
         let vel = crate::init::maxwell_velocities::<D2>(&mass, 1.0, seed);
         let radius = gas.diameter.iter().map(|d| 0.5 * d).collect();

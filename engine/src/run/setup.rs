@@ -38,6 +38,7 @@ pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
             let gas = random_gas::<D>(
                 n,
                 scene.particles.min_diameter,
+                scene.particles.classes,
                 scene.initial.packing_fraction,
                 scene.seed,
             )?;

@@ -66,6 +66,12 @@ pub struct Particles {
     /// Smallest diameter in units of the largest one, `a` (GRC07: 0.5; monodisperse: 1).
     #[serde(default = "one")]
     pub min_diameter: f64,
+    /// Diameter classes: `K` ≥ 2 equally spaced diameters from `min_diameter` to 1, each grain
+    /// drawn uniformly among them (absent: uniform in [min_diameter, 1]). LAMMPS 2021 writes the
+    /// GRC07 attraction as one `pair_style table` per pair of atom types, exact only when the
+    /// diameters come in classes (issue 14).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub classes: Option<usize>,
 }
 
 fn one() -> f64 {

@@ -128,6 +128,14 @@ impl Scene {
                 format!("must lie in (0, 1] (units of the largest diameter a), got {dmin}"),
             ));
         }
+        if let Some(k) = self.particles.classes {
+            if k < 2 || dmin >= 1.0 {
+                return Err(err(
+                    "particles.classes",
+                    format!("needs at least 2 classes and min_diameter < 1 (got {k} classes, min_diameter = {dmin}); remove it for equal or continuous sizes"),
+                ));
+            }
+        }
         let check_mu = |field: &str, mu: Mu| -> Result<(), SceneError> {
             match mu {
                 Mu::Infinite => Ok(()),

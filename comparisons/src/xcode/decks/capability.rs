@@ -3,6 +3,7 @@
 //! a two-particle deck test per code (`tests/externals.rs`); the sources are the codes'
 //! manuals and the observations in `shared/external-codes.md`.
 
+use super::lammps_table::Classes;
 use super::{Code, StageKind, Start};
 use grainbench_engine::scene::{Law, Mu};
 
@@ -58,6 +59,9 @@ pub enum Feature {
     NoSlip,
     /// Contact pull −F0 and linear attraction over the gap D0 (GRC07 (4)–(5)).
     Adhesion,
+    /// Adhesion between grains of more than [`MAX_CLASSES`](super::lammps_table::MAX_CLASSES) distinct diameters (continuous
+    /// sizes): the attraction depends on each pair's R_i + R_j.
+    AdhesionContinuousSizes,
     /// Rolling spring K_r with cap μ_r N_e (GRC07 (9)–(10)).
     Rolling,
     /// Tangential/rolling viscosity (grainbench option, not in GRC07).
@@ -87,7 +91,7 @@ pub enum Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 22] = [
+    pub const ALL: [Feature; 23] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -97,6 +101,7 @@ impl Feature {
         Feature::Coulomb,
         Feature::NoSlip,
         Feature::Adhesion,
+        Feature::AdhesionContinuousSizes,
         Feature::Rolling,
         Feature::TangentialDamping,
         Feature::Disks,
@@ -123,6 +128,7 @@ impl Feature {
             Feature::Coulomb => "coulomb",
             Feature::NoSlip => "no-slip",
             Feature::Adhesion => "adhesion",
+            Feature::AdhesionContinuousSizes => "adhesion-continuous-sizes",
             Feature::Rolling => "rolling-resistance",
             Feature::TangentialDamping => "tangential-damping",
             Feature::Disks => "disks-2d",
@@ -150,6 +156,7 @@ impl Feature {
             Feature::Coulomb => "Coulomb |T| ≤ μ N_e on the elastic normal force",
             Feature::NoSlip => "μ = ∞: contacts never slide",
             Feature::Adhesion => "pull -F0 in contact, linear attraction over D0 (GRC07 (4)-(5))",
+            Feature::AdhesionContinuousSizes => "adhesion between continuously distributed diameters (more than 16 distinct; `particles.classes` gives classes)",
             Feature::Rolling => "rolling spring K_r, cap μ_r N_e (GRC07 (9)-(10))",
             Feature::TangentialDamping => "tangential/rolling viscosity (grainbench option)",
             Feature::Disks => "2D disks",
@@ -195,6 +202,9 @@ pub fn features(start: &Start) -> Vec<Feature> {
             }
             if cohesion.is_some() {
                 f.push(Feature::Adhesion);
+                if Classes::of(start).is_none() {
+                    f.push(Feature::AdhesionContinuousSizes);
+                }
             }
             if rolling.is_some() {
                 f.push(Feature::Rolling);
@@ -253,6 +263,8 @@ pub fn features(start: &Start) -> Vec<Feature> {
 const RELAX: &str =
     "the switch to background damping on a settled interaction list is not generated";
 
+const NO_GRC07_ADHESION: &str = "no GRC07 adhesion at all (see `adhesion`)";
+
 const INTERLUDE: &str = "no event-driven hard-grain dynamics; grainbench prepares hard-grain stages only before the first DEM stage";
 
 /// The matrix.
@@ -265,20 +277,20 @@ pub fn support(code: Code, f: Feature) -> Support {
         // within 1e-3: Hertz normal force, damping (2021: Tsuji's negative root; 2025: Tsuji's
         // root above 1 at ζ = 0.98, equal and unequal masses), Mindlin K_T, rescale on unloading
         // (3D spheres); hooke K_N, damping (2025: coeff_restitution), linear_history K_T (2D
-        // disks); 2025 only: the GRC07 adhesion by lepton/sphere (normal force at seven gaps and
+        // disks); the GRC07 adhesion, 2025 by lepton/sphere, 2021 by per-class tables (normal force at seven gaps and
         // overlaps, with damping, and K_T through the overlay). Disk inertia (nve/sphere disc)
         // is not tested.
         Code::Lammps | Code::Lammps2025 => match f {
             F::Coulomb => Approximate("Coulomb cap uses the total normal force (damping included)"),
             F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
-            F::Adhesion if code == Code::Lammps2025 => Exact,
-            F::Adhesion => Unsupported("pair_style granular has no pull −F0 with a linear attraction range, and pair_style table sees only atom types (a hybrid/overlay table per size class is not generated yet)"),
+            F::Adhesion => Exact,
+            F::AdhesionContinuousSizes if code == Code::Lammps2025 => Exact,
+            F::AdhesionContinuousSizes => Unsupported("pair_style table sees only r and the atom types, so the attraction is one table per pair of diameter classes: give the scene `particles.classes` (at most 16)"),
             F::Rolling => Unsupported("rolling sds needs K_r/R_eff² and μ_r/R_eff per type pair; not generated yet for a continuous size distribution"),
             F::TangentialDamping => Unsupported("tangential damping in `linear_history` is not generated"),
             F::StressControl => Approximate("fix press/berendsen aniso on the virial stress: each axis' strain rate is (P − σ_αα)/(3Bτ), at the cap only while σ_αα ≈ 0, no cell mass"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
-            F::FinalRelaxation if code == Code::Lammps2025 => Approximate("switch tested at the end of each settle_time chunk on the contact count (compute contact/atom: touching pairs, not the interaction list) with the kinetic and stress criteria; damping by fix langevin at T = 0 (drag −γ m v exact, spins at LAMMPS's rotational rate); tangential dashpot inside the Coulomb cap; window checked by fix halt runs"),
-            F::FinalRelaxation => Unsupported(RELAX),
+            F::FinalRelaxation => Approximate("switch tested at the end of each settle_time chunk on the contact count (compute contact/atom: touching pairs, not the interaction list) with the kinetic and stress criteria; damping by fix langevin at T = 0 (drag −γ m v exact, spins at LAMMPS's rotational rate); tangential dashpot inside the Coulomb cap; window checked by fix halt runs"),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the barostat; contact history carries over"),
             F::EquilibriumCriteria => Approximate("same measures (free spins of grains without contact left out), checked every check_every steps by fix halt on forces computed before that step's Berendsen dilation"),
@@ -292,6 +304,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Coulomb => Approximate("Coulomb cap includes the damping normal force"),
             F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
             F::Adhesion => Unsupported("cohesion sjkr/sjkr2 give a force ∝ contact area, zero at first touch, with no range"),
+            F::AdhesionContinuousSizes => Unsupported(NO_GRC07_ADHESION),
             F::Rolling => Unsupported("rolling_friction epsd3 not generated"),
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),
             F::Disks => Unsupported("2D decks not generated for LIGGGHTS"),
@@ -311,6 +324,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::NoSlip => Approximate("μ = ∞ given as friction angle atan(1e300) (tan ≈ 1.6e16); T still drops to 0 while the total normal force is clipped"),
             F::LinearSprings | F::LinearDamping => Unsupported("Law2_ScGeom_FrictPhys_CundallStrack has no dashpot and ViscElPhys is wrong in a deforming periodic cell"),
             F::Adhesion => Unsupported("CohFrictMat gives a spring to −F0 then constant −F0 (not generated)"),
+            F::AdhesionContinuousSizes => Unsupported(NO_GRC07_ADHESION),
             F::Rolling => Unsupported("moment law not generated"),
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),
             F::Disks => Unsupported("2D disks (blockedDOFs emulation) not generated"),

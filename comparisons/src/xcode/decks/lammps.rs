@@ -36,6 +36,7 @@
 //! by `fix halt` on an equal-style variable that is 1 when all criteria hold, checked every
 //! `check_every` steps.
 
+use super::lammps_table::{pair_lines, tables, Classes, TABLE};
 use super::{header_lines, num, Code, Deck, StageKind, Start};
 use grainbench_engine::scene::{Law, Mu, Relax};
 use std::f64::consts::PI;
@@ -113,12 +114,17 @@ pub fn lepton_attraction(f0: f64, d0: f64) -> String {
     )
 }
 
-/// `pair_style` of the scene: `granular`, or with adhesion (LAMMPS 2025 only, refused for
-/// 2021 by the matrix) `hybrid/overlay granular lepton/sphere` with a cut-off covering
-/// 2R_max + D0.
-fn pair_style(start: &Start) -> String {
+/// `pair_style` of the scene: `granular`, or with adhesion `hybrid/overlay granular
+/// lepton/sphere` with a cut-off covering 2R_max + D0 (LAMMPS 2025), or `hybrid/overlay
+/// granular table` with one attraction table per pair of diameter classes, their `pair_coeff`
+/// lines included (LAMMPS 2021; the matrix refuses scenes without classes).
+fn pair_style(start: &Start, code: Code) -> String {
     match start.law().cohesion() {
         None => "pair_style granular".into(),
+        Some(c) if code == Code::Lammps => {
+            let classes = Classes::of(start).expect("the matrix refuses continuous sizes");
+            pair_lines(&classes, c.d0, TABLE).trim_end().to_string()
+        }
         Some(c) => {
             let dmax = start.diameter.iter().fold(0.0_f64, |a, &d| a.max(d));
             format!(
@@ -175,6 +181,9 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code, zeta_t: f64) -> String 
             let granular = format!("hooke {} {} {t} damping {model}", num(kappa), num(e));
             match cohesion {
                 None => format!("pair_coeff * * {granular}"),
+                // The tables' pair_coeff lines come with the pair_style ([`pair_style`]); a
+                // granular line given again keeps its place in hybrid/overlay's list.
+                Some(_) if code == Code::Lammps => format!("pair_coeff * * granular {granular}"),
                 // lepton/sphere first: hybrid/overlay's copy_svector (LAMMPS 2025) passes on
                 // the extra values (`compute pair/local p1 p2 p3`, the tangential force) of the
                 // last sub-style given to a type pair only.
@@ -197,30 +206,90 @@ fn servo_gain(pressure: f64, st: &super::Stage) -> f64 {
     (2.0 * st.max_strain_rate).min(pressure / (2.0 * st.kappa * st.dt))
 }
 
+/// LAMMPS 2021's stand-in for deform/pressure (which it lacks) in adhesive stage `k`: `fix
+/// deform` with `variable` box lengths, each step L ← L(1 + r·dt) per axis with r = g·(σ_αα −
+/// P)/P at most the cap (g from [`servo_gain`]), σ from that step's virial (a `fix ave/time`
+/// every step keeps it current; defined first, it runs first at the end of the step). fix
+/// deform measures its displacement from the box at each run's start: returns the lines that
+/// record that box, to give before every `run` of the stage.
+fn servo_2021(s: &mut String, start: &Start, st: &super::Stage, k: usize, pressure: f64) -> String {
+    let axes = &["x", "y", "z"][..start.dimension];
+    let cols: Vec<String> = (1..=start.dimension)
+        .map(|a| format!("c_pvir[{a}]"))
+        .collect();
+    let (p, g, cap) = (
+        num(pressure),
+        num(servo_gain(pressure, st)),
+        num(st.max_strain_rate),
+    );
+    let _ = writeln!(
+        s,
+        "# Stress control (LAMMPS 2021 has no deform/pressure): fix deform sets each box length to\n\
+         # L(1 + r dt), r = g·(σ_αα − P)/P at most the cap {cap}, g = min(2 cap, P/(2 κ dt)) = {g}.\n\
+         fix avp{k} all ave/time 1 1 1 {}",
+        cols.join(" ")
+    );
+    let mut rebase = String::new();
+    let mut deform = String::from("fix baro all deform 1");
+    for (a, ax) in axes.iter().enumerate() {
+        let a1 = a + 1;
+        let _ = writeln!(
+            s,
+            "variable r{k}{ax}raw equal {g}*(f_avp{k}[{a1}]-{p})/{p}\n\
+             variable r{k}{ax} equal (v_r{k}{ax}raw>{cap})*{cap}-(v_r{k}{ax}raw<-{cap})*{cap}+(abs(v_r{k}{ax}raw)<={cap})*v_r{k}{ax}raw\n\
+             variable d{k}{ax} equal l{ax}*(1+v_r{k}{ax}*dt)-v_l0{k}{ax}\n\
+             variable u{k}{ax} equal l{ax}*v_r{k}{ax}"
+        );
+        let _ = writeln!(rebase, "variable l0{k}{ax} equal $(l{ax})");
+        let _ = write!(deform, " {ax} variable v_d{k}{ax} v_u{k}{ax}");
+    }
+    let _ = writeln!(s, "{rebase}{deform} remap x");
+    rebase
+}
+
 /// Stress control of adhesive decks (replaces the matrix's Berendsen line in their header).
 pub const ADHESIVE_STRESS_CONTROL: &str = "stress-control: fix deform/pressure (LAMMPS 2025), per-axis strain rate g·(σ_αα − P)/P on the virial stress, g = min(2·cap, P/(2κ dt)) for a stable loop, at most the cap (Berendsen's unbounded rate collapses the cell when an adhesive packing's virial swings to ±100 P), no cell mass";
 
-/// The deviation line of feature `f` (matrix reason `why`) in an adhesive LAMMPS 2025 deck,
-/// whose stress control is deform/pressure, not Berendsen.
-pub fn adhesive_deviation(f: super::Feature, why: &str) -> String {
+/// Stress control of LAMMPS 2021 adhesive decks ([`servo_2021`]).
+pub const ADHESIVE_STRESS_CONTROL_2021: &str = "stress-control: fix deform with variable box lengths (LAMMPS 2021 has no deform/pressure): each step L ← L(1 + r dt) per axis, r = g·(σ_αα − P)/P from that step's virial stress, at most the cap, g as LAMMPS 2025's deform/pressure decks, no cell mass";
+
+/// The deviation line of feature `f` (matrix reason `why`) in an adhesive LAMMPS deck, whose
+/// stress control is deform/pressure (2025) or a fix deform servo (2021), not Berendsen.
+pub fn adhesive_deviation(f: super::Feature, why: &str, code: Code) -> String {
+    let (control, change) = if code == Code::Lammps2025 {
+        (ADHESIVE_STRESS_CONTROL, "deform/pressure box change")
+    } else {
+        (ADHESIVE_STRESS_CONTROL_2021, "fix deform box change")
+    };
     match f {
-        super::Feature::StressControl => ADHESIVE_STRESS_CONTROL.to_string(),
-        _ => format!(
-            "{}: {}",
-            f.key(),
-            why.replace("Berendsen dilation", "deform/pressure box change")
-        ),
+        super::Feature::StressControl => control.to_string(),
+        _ => format!("{}: {}", f.key(), why.replace("Berendsen dilation", change)),
     }
 }
 
 /// The LAMMPS deck of `start` for `code` (either LAMMPS version).
 pub fn deck(start: &Start, code: Code, deviations: &[String]) -> Deck {
+    // LAMMPS 2021 adhesion: one atom type per diameter class, the attraction in tables.
+    let classes = match start.law().cohesion() {
+        Some(c) if code == Code::Lammps => Classes::of(start).map(|k| (k, c.d0)),
+        _ => None,
+    };
+    let mut files = vec![
+        ("in.lammps".into(), input(start, code, deviations)),
+        (
+            "data.lammps".into(),
+            data(start, classes.as_ref().map(|k| &k.0)),
+        ),
+    ];
+    if let Some((k, d0)) = &classes {
+        files.push((
+            TABLE.into(),
+            tables(k, *d0, &format!("scene {}", start.scene.name)),
+        ));
+    }
     Deck {
         code,
-        files: vec![
-            ("in.lammps".into(), input(start, code, deviations)),
-            ("data.lammps".into(), data(start)),
-        ],
+        files,
         deviations: deviations.to_vec(),
         args: vec![
             "-in".into(),
@@ -232,10 +301,16 @@ pub fn deck(start: &Start, code: Code, deviations: &[String]) -> Deck {
     }
 }
 
-fn data(start: &Start) -> String {
+/// The data file; with `classes`, atom type k + 1 is diameter class k.
+fn data(start: &Start, classes: Option<&Classes>) -> String {
     let d3 = start.dimension == 3;
     let mut s = format!("grainbench start of scene {}\n\n", start.scene.name);
-    let _ = writeln!(s, "{} atoms\n1 atom types\n", start.n());
+    let _ = writeln!(
+        s,
+        "{} atoms\n{} atom types\n",
+        start.n(),
+        classes.map_or(1, Classes::len)
+    );
     let axes = ["x", "y", "z"];
     for (a, ax) in axes.iter().enumerate() {
         let hi = if a < start.dimension {
@@ -255,8 +330,9 @@ fn data(start: &Start) -> String {
         let z = if d3 { num(p[2]) } else { "0".into() };
         let _ = writeln!(
             s,
-            "{} 1 {} {} {} {} {z}",
+            "{} {} {} {} {} {} {z}",
             i + 1,
+            classes.map_or(1, |k| k.of[i] + 1),
             num(d),
             num(rho),
             num(p[0]),
@@ -349,7 +425,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
             .unwrap_or_else(|| {
                 pair_coeff(start.law(), start.law().kappa(), Mu::Finite(0.0), code, 0.0)
             }),
-        style = pair_style(start),
+        style = pair_style(start, code),
         // With adhesion every pair within the cut-off (distant attractions included); the
         // importer drops the ones that carry no force.
         cutoff = if start.cohesive() { "" } else { " cutoff radius" },
@@ -372,8 +448,12 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         if friction && st.mu.value() > 0.0 {
             crit.push(format!("(c_fmax[2]<{})", num(tol.moment)));
         }
+        // Lines before each `run` of the stage (LAMMPS 2021 adhesive servo: the box at the run's start).
+        let mut rebase = String::new();
         if let StageKind::Compress { pressure } = st.kind {
-            if start.cohesive() {
+            if start.cohesive() && code == Code::Lammps {
+                rebase = servo_2021(&mut s, start, st, k1, pressure);
+            } else if start.cohesive() {
                 // An adhesive packing's virial swings to ±100 P while grains collide and
                 // stick: Berendsen's rate (P − σ)/(3Bτ) has no bound and collapses the cell.
                 // LAMMPS 2025's deform/pressure caps it: per axis, rate = g(σ_αα − P)/P at
@@ -422,7 +502,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         let _ = writeln!(s, "variable ok{k1} equal {}", crit.join("*"));
         let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
         if let Some(relax) = st.relax {
-            relaxed_stage(&mut s, start, st, k1, relax, code);
+            relaxed_stage(&mut s, start, st, k1, relax, code, &rebase);
         } else {
             let _ = writeln!(
                 s,
@@ -438,7 +518,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
                     st.check_every
                 );
             }
-            let _ = writeln!(s, "run {}", st.max_steps);
+            let _ = writeln!(s, "{rebase}run {}", st.max_steps);
             // The thermo line at the run's last step invokes the computes v_ok reads.
             let _ = writeln!(
                 s,
@@ -450,6 +530,9 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         }
         if matches!(st.kind, StageKind::Compress { .. }) {
             s.push_str("unfix baro\n");
+            if !rebase.is_empty() {
+                let _ = writeln!(s, "unfix avp{k1}");
+            }
         }
     }
     s.push_str(
@@ -481,6 +564,7 @@ fn relaxed_stage(
     k: usize,
     relax: Relax,
     code: Code,
+    rebase: &str,
 ) {
     let tol = st.tolerances;
     let n = start.n();
@@ -520,7 +604,7 @@ fn relaxed_stage(
          thermo_modify norm no flush yes\n\
          thermo {every}\n\
          label settle{k}\n\
-         run {settle}\n\
+         {rebase}run {settle}\n\
          if \"${{ncnt{k}}} == ${{nprev{k}}} && ${{rest{k}}} > 0.5\" then \"jump SELF damp{k}\"\n\
          variable nprev{k} equal ${{ncnt{k}}}\n\
          if \"$(step) < ${{end{k}}}\" then \"jump SELF settle{k}\"\n\
@@ -535,11 +619,11 @@ fn relaxed_stage(
          label hold{k}\n\
          if \"$(step) >= ${{end{k}}}\" then \"variable status string time-limit\" \"jump SELF undamp{k}\"\n\
          fix halt all halt {every} v_ok{k} > 0.5 error continue\n\
-         run ${{end{k}}} upto\n\
+         {rebase}run ${{end{k}}} upto\n\
          unfix halt\n\
          if \"${{ok{k}}} < 0.5\" then \"variable status string time-limit\" \"jump SELF undamp{k}\"\n\
          fix halt all halt {every} v_ok{k} < 0.5 error continue\n\
-         run {window}\n\
+         {rebase}run {window}\n\
          unfix halt\n\
          if \"${{ok{k}}} > 0.5\" then \"variable status string equilibrium\" \"jump SELF undamp{k}\"\n\
          jump SELF hold{k}\n\
@@ -633,10 +717,52 @@ mod tests {
             .deviations
             .iter()
             .any(|d| d.starts_with("stress-control: fix deform/pressure")));
+        // Continuous sizes: LAMMPS 2021 (tables per atom-type pair) refuses, naming the fix.
         let refusal = super::super::deck(&start, Code::Lammps).unwrap_err();
-        assert!(refusal
-            .missing
+        assert_eq!(
+            refusal.missing.iter().map(|(f, _)| *f).collect::<Vec<_>>(),
+            [super::super::Feature::AdhesionContinuousSizes]
+        );
+        assert!(refusal.to_string().contains("particles.classes"));
+    }
+
+    /// LAMMPS 2021, diameters in classes: one atom type per class, one table per type pair
+    /// (cut-off = the table's r_hi), the granular line last (its p1..p3 reach pair/local), the
+    /// fix deform servo re-based before every run, and the same relaxation.
+    #[test]
+    fn adhesive_class_deck_uses_tables_and_a_deform_servo() {
+        let scene = grainbench_engine::library::scene("xcode-cohesive-classes-smoke")
+            .unwrap()
+            .unwrap();
+        let start = Start::of(&scene).unwrap();
+        let deck = super::super::deck(&start, Code::Lammps).unwrap();
+        let input = &deck.files[0].1;
+        let data = &deck.files[1].1;
+        assert!(data.contains("\n5 atom types\n"));
+        let table = &deck.files.iter().find(|(n, _)| n == TABLE).unwrap().1;
+        assert_eq!(table.matches("\nN 10001 RSQ ").count(), 15);
+        for line in [
+            "pair_style hybrid/overlay granular table linear 10001\npair_coeff 1 1 table cohesion.table C_1_1 5.01e-1\n",
+            "pair_coeff 5 5 table cohesion.table C_5_5 1.001\npair_coeff * * granular hooke 1e4",
+            "fix avp1 all ave/time 1 1 1 c_pvir[1] c_pvir[2]",
+            "variable d1x equal lx*(1+v_r1x*dt)-v_l01x",
+            "fix baro all deform 1 x variable v_d1x v_u1x y variable v_d1y v_u1y remap x",
+            "label settle1\nvariable l01x equal $(lx)\nvariable l01y equal $(ly)\nrun ",
+            "fix relax1 all langevin 0.0 0.0 1 1 omega yes",
+            "unfix baro\nunfix avp1\n",
+        ] {
+            assert!(input.contains(line), "missing `{line}`");
+        }
+        assert!(!input.contains("all deform/pressure") && !input.contains("lepton/sphere"));
+        // Every run of the stage starts from a re-based servo.
+        assert_eq!(
+            input.matches("\nrun ").count() - 1,
+            input.matches("variable l01y equal $(ly)\nrun ").count(),
+            "the final `run 0` aside"
+        );
+        assert!(deck
+            .deviations
             .iter()
-            .any(|(f, _)| *f == super::super::Feature::Adhesion));
+            .any(|d| d.starts_with("stress-control: fix deform with variable box lengths")));
     }
 }

@@ -1,63 +1,179 @@
-//! Bench-only LAMMPS deck for adhesive (GRC07) scenes, for throughput only: the diameters are
-//! snapped to a few size classes (atom types), the contact law is the cohesionless LAMMPS deck
-//! (`pair_style granular`, `hooke`) and the GRC07 attraction (−F0 in contact, −F0(1 − g/D0)
-//! over a gap g < D0) is overlaid by `pair_style table linear` with one table per pair of
-//! classes (`pair_style hybrid/overlay granular table linear N`). Approximate: the grains are
-//! not the scene's (snapped diameters), and the Coulomb cap leaves the table force out. It
+//! GRC07 attraction (−F0 in contact, −F0(1 − g/D0) over a gap g < D0) as LAMMPS
+//! `pair_style table` sections, one per pair of diameter classes (atom types): `pair_style
+//! table` sees only r and the types, so the law is exact only when the diameters come in
+//! classes (`particles.classes`, issue 14). The tables are laid out so that LAMMPS's `linear`
+//! interpolation is exact to ~1e-7 F0 ([`tables`]).
+//!
+//! Users: the LAMMPS 2021 deck of an adhesive class scene ([`super::lammps`], with [`Classes::of`])
+//! and a bench-only deck ([`deck`]) for throughput on continuous sizes: diameters snapped to a
+//! few classes, the cohesionless LAMMPS deck with the tables overlaid (`pair_style hybrid/overlay
+//! granular table linear N`). That one is approximate (the grains are not the scene's) and
 //! writes no contact dump (its final state is not compared); the steps come from its log.
-
 use super::{num, Code, Deck, Start};
 use grainbench_engine::scene::Law;
 use std::fmt::Write as _;
 
-/// Points of each table.
-const POINTS: usize = 5000;
+/// Points of each table (`pair_style table linear POINTS`: the same for every table).
+pub const POINTS: usize = 10001;
+/// Intervals of each table across the attraction range [σ, σ + D0] (the rest covers overlaps).
+const RAMP_INTERVALS: usize = 64;
+/// Most classes a scene may have for the per-class-pair tables (K(K+1)/2 tables).
+pub const MAX_CLASSES: usize = 16;
 /// Size classes (atom types) of [`deck`] as `grainbench bench` uses it.
 pub const CLASSES: usize = 5;
-/// The table file: its presence marks a deck as bench-only.
+/// The table file of an exact (class scene) deck.
 pub const TABLE: &str = "cohesion.table";
+/// The table file of the bench-only deck: its presence marks a deck as throughput only.
+pub const BENCH_TABLE: &str = "cohesion-snapped.table";
 
-/// The deck, or why not (no adhesion, or the cohesionless deck is refused).
+/// Diameter classes of a start: the class diameters, ascending, and each grain's class.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Classes {
+    pub diameter: Vec<f64>,
+    pub of: Vec<usize>,
+}
+
+impl Classes {
+    /// The start's own diameters as classes, when it has at most [`MAX_CLASSES`] distinct ones.
+    pub fn of(start: &Start) -> Option<Classes> {
+        let mut diameter: Vec<f64> = Vec::new();
+        for &d in &start.diameter {
+            if !diameter.contains(&d) {
+                if diameter.len() == MAX_CLASSES {
+                    return None;
+                }
+                diameter.push(d);
+            }
+        }
+        diameter.sort_by(f64::total_cmp);
+        let of = start
+            .diameter
+            .iter()
+            .map(|d| diameter.iter().position(|x| x == d).expect("listed"))
+            .collect();
+        Some(Classes { diameter, of })
+    }
+
+    pub fn len(&self) -> usize {
+        self.diameter.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.diameter.is_empty()
+    }
+
+    /// Contact distance σ = (d_i + d_j)/2 of classes `i`, `j`.
+    pub fn sigma(&self, i: usize, j: usize) -> f64 {
+        0.5 * (self.diameter[i] + self.diameter[j])
+    }
+}
+
+/// Table section name of classes `i` ≤ `j` (0-based).
+fn section(i: usize, j: usize) -> String {
+    format!("C_{}_{}", i + 1, j + 1)
+}
+
+/// (r_lo, r_hi) of the table of contact distance `sigma`, as LAMMPS reads them back: r_hi =
+/// σ + D0 (the cut-off: no force beyond); r² uniform with [`RAMP_INTERVALS`] steps across
+/// [σ², (σ + D0)²], so that both kinks of the law are table points, and the other
+/// POINTS − 1 − RAMP_INTERVALS steps below σ² (overlaps up to ~6 % of σ at D0 = 1e-3), r_lo
+/// at least σ/2.
+fn grid(sigma: f64, d0: f64) -> (f64, f64) {
+    let hi = sigma + d0;
+    let ramp = hi * hi - sigma * sigma;
+    let below = (POINTS - 1 - RAMP_INTERVALS) as f64 * ramp / RAMP_INTERVALS as f64;
+    let lo = (sigma * sigma - below).max(0.25 * sigma * sigma).sqrt();
+    // Through the deck's text, as LAMMPS parses them.
+    let text = |x: f64| num(x).parse::<f64>().expect("num() reads back");
+    (text(lo), text(hi))
+}
+
+/// Pair cut-off of classes `i`, `j` (the table's r_hi, equal as LAMMPS requires to use the
+/// table's points as they are).
+pub fn cutoff(classes: &Classes, i: usize, j: usize, d0: f64) -> f64 {
+    grid(classes.sigma(i, j), d0).1
+}
+
+/// GRC07 attraction at centre distance `r` for contact distance `sigma`: (force along the
+/// separation, positive repulsive; energy, zero at σ + D0), F0 = 1.
+pub fn attraction(r: f64, sigma: f64, d0: f64) -> (f64, f64) {
+    let g = sigma + d0 - r;
+    if g >= d0 {
+        (-1.0, -0.5 * d0 - (g - d0))
+    } else if g > 0.0 {
+        (-g / d0, -0.5 * g * g / d0)
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// r of point `p` of a table on [lo, hi], as LAMMPS recomputes it for `RSQ` tables.
+fn point(lo: f64, hi: f64, p: usize) -> f64 {
+    (lo * lo + (hi * hi - lo * lo) * p as f64 / (POINTS - 1) as f64).sqrt()
+}
+
+/// The attraction table file: one `RSQ` section per class pair with [`POINTS`] points
+/// (`pair_style table linear POINTS` then uses them as they are, no spline). LAMMPS
+/// interpolates F/r linearly in r², which is exact at the points and off by at most
+/// (Δ²/8)·max|d²(F/r)/d(r²)|·r between them: with Δ = 2σD0/64 that is ~2e-7 F0 on the ramp
+/// at σ = 1/2 ([`tests`]).
+pub fn tables(classes: &Classes, d0: f64, title: &str) -> String {
+    let mut s = format!("# GRC07 attraction per class pair: {title}\n");
+    let k = classes.len();
+    for i in 0..k {
+        for j in i..k {
+            let sigma = classes.sigma(i, j);
+            let (lo, hi) = grid(sigma, d0);
+            let _ = write!(
+                s,
+                "\n{}\nN {POINTS} RSQ {} {}\n\n",
+                section(i, j),
+                num(lo),
+                num(hi)
+            );
+            for p in 0..POINTS {
+                let r = point(lo, hi, p);
+                let (f, e) = attraction(r, sigma, d0);
+                let _ = writeln!(s, "{} {} {} {}", p + 1, num(r), num(e), num(f));
+            }
+        }
+    }
+    s
+}
+
+/// `pair_style` and the table `pair_coeff` lines of a deck with these classes (the granular
+/// `pair_coeff * * granular …` line follows them).
+pub fn pair_lines(classes: &Classes, d0: f64, file: &str) -> String {
+    let mut s = format!("pair_style hybrid/overlay granular table linear {POINTS}\n");
+    let k = classes.len();
+    for i in 0..k {
+        for j in i..k {
+            let _ = writeln!(
+                s,
+                "pair_coeff {} {} table {file} {} {}",
+                i + 1,
+                j + 1,
+                section(i, j),
+                num(cutoff(classes, i, j, d0))
+            );
+        }
+    }
+    s
+}
+
+/// The bench-only deck, or why not (no adhesion, or the cohesionless deck is refused).
 pub fn deck(start: &Start, classes: usize) -> Result<Deck, String> {
     let Some(cohesion) = start.law().cohesion() else {
         return Err("the scene has no adhesion: use the regular LAMMPS deck".into());
     };
     let d0 = cohesion.d0;
-    let classes = classes.max(1);
-    let (dmin, dmax) = start
-        .diameter
-        .iter()
-        .fold((f64::INFINITY, 0.0_f64), |(a, b), &d| (a.min(d), b.max(d)));
-    let width = (dmax - dmin) / classes as f64;
-    let class_of = |d: f64| -> usize {
-        if width <= 0.0 {
-            0
-        } else {
-            (((d - dmin) / width) as usize).min(classes - 1)
-        }
-    };
-    // Class diameter: the mean of its grains' diameters (empty classes: the bin centre).
-    let mut sum = vec![0.0; classes];
-    let mut count = vec![0usize; classes];
-    for &d in &start.diameter {
-        sum[class_of(d)] += d;
-        count[class_of(d)] += 1;
-    }
-    let class_d: Vec<f64> = (0..classes)
-        .map(|k| {
-            if count[k] > 0 {
-                sum[k] / count[k] as f64
-            } else {
-                dmin + (k as f64 + 0.5) * width
-            }
-        })
-        .collect();
-    let types: Vec<usize> = start.diameter.iter().map(|&d| class_of(d)).collect();
+    let snapped_classes = snap(start, classes.max(1));
+    let classes = snapped_classes.len();
     let mut snapped = start.clone();
     let dim = start.dimension as i32;
     let inertia_factor = if start.dimension == 2 { 0.125 } else { 0.1 };
-    for (i, &t) in types.iter().enumerate() {
-        let d = class_d[t];
+    for (i, &t) in snapped_classes.of.iter().enumerate() {
+        let d = snapped_classes.diameter[t];
         snapped.diameter[i] = d;
         snapped.mass[i] = d.powi(dim);
         snapped.inertia[i] = inertia_factor * snapped.mass[i] * d * d;
@@ -65,6 +181,7 @@ pub fn deck(start: &Start, classes: usize) -> Result<Deck, String> {
     if let Law::Linear { cohesion, .. } = &mut snapped.scene.law {
         *cohesion = None;
     }
+    snapped.scene.particles.classes = None;
     let mut deck = super::deck(&snapped, Code::Lammps).map_err(|e| e.to_string())?;
     let note = format!(
         "adhesion: bench-only deck for throughput: diameters snapped to {classes} size classes (atom types), GRC07 attraction by pair_style table per class pair (hybrid/overlay), Coulomb cap without it; final state not comparable"
@@ -72,49 +189,69 @@ pub fn deck(start: &Start, classes: usize) -> Result<Deck, String> {
     deck.deviations.push(note.clone());
     for (name, text) in deck.files.iter_mut() {
         if name == "in.lammps" {
-            *text = input(text, classes, &class_d, d0, &note)?;
+            *text = input(text, &snapped_classes, d0, &note)?;
         } else if name == "data.lammps" {
-            *text = data(text, classes, &types)?;
+            *text = data(text, classes, &snapped_classes.of)?;
         }
     }
-    deck.files.push((TABLE.into(), tables(&class_d, d0)));
+    deck.files.push((
+        BENCH_TABLE.into(),
+        tables(&snapped_classes, d0, "grainbench bench-only deck"),
+    ));
     Ok(deck)
 }
 
-fn input(
-    text: &str,
-    classes: usize,
-    class_d: &[f64],
-    d0: f64,
-    note: &str,
-) -> Result<String, String> {
+/// `k` classes of equal width over the start's diameters, each at the mean diameter of its
+/// grains (empty classes: the bin centre).
+fn snap(start: &Start, k: usize) -> Classes {
+    let (dmin, dmax) = start
+        .diameter
+        .iter()
+        .fold((f64::INFINITY, 0.0_f64), |(a, b), &d| (a.min(d), b.max(d)));
+    let width = (dmax - dmin) / k as f64;
+    let class_of = |d: f64| -> usize {
+        if width <= 0.0 {
+            0
+        } else {
+            (((d - dmin) / width) as usize).min(k - 1)
+        }
+    };
+    let mut sum = vec![0.0; k];
+    let mut count = vec![0usize; k];
+    for &d in &start.diameter {
+        sum[class_of(d)] += d;
+        count[class_of(d)] += 1;
+    }
+    let diameter = (0..k)
+        .map(|c| {
+            if count[c] > 0 {
+                sum[c] / count[c] as f64
+            } else {
+                dmin + (c as f64 + 0.5) * width
+            }
+        })
+        .collect();
+    Classes {
+        diameter,
+        of: start.diameter.iter().map(|&d| class_of(d)).collect(),
+    }
+}
+
+fn input(text: &str, classes: &Classes, d0: f64, note: &str) -> Result<String, String> {
     let mut out = String::new();
     let _ = writeln!(out, "# BENCH-ONLY (throughput): {note}");
     let mut skipping = false;
+    let mut overlaid = false;
     for line in text.lines() {
         if line.starts_with("pair_style granular") {
-            let _ = writeln!(
-                out,
-                "pair_style hybrid/overlay granular table linear {POINTS}"
-            );
             continue;
         }
         if let Some(rest) = line.strip_prefix("pair_coeff * * ") {
-            let _ = writeln!(out, "pair_coeff * * granular {rest}");
-            for i in 0..classes {
-                for j in i..classes {
-                    let cut = 0.5 * (class_d[i] + class_d[j]) + d0;
-                    let _ = writeln!(
-                        out,
-                        "pair_coeff {} {} table cohesion.table C_{}_{} {}",
-                        i + 1,
-                        j + 1,
-                        i + 1,
-                        j + 1,
-                        num(cut)
-                    );
-                }
+            if !overlaid {
+                out.push_str(&pair_lines(classes, d0, BENCH_TABLE));
+                overlaid = true;
             }
+            let _ = writeln!(out, "pair_coeff * * granular {rest}");
             continue;
         }
         // No contact dump: pair/local is not needed for throughput.
@@ -129,8 +266,8 @@ fn input(
         }
         let _ = writeln!(out, "{line}");
     }
-    if !out.contains("pair_style hybrid/overlay") {
-        return Err("the LAMMPS deck has no `pair_style granular` line to overlay".into());
+    if !overlaid {
+        return Err("the LAMMPS deck has no `pair_coeff * *` line to overlay".into());
     }
     Ok(out)
 }
@@ -162,34 +299,59 @@ fn data(text: &str, classes: usize, types: &[usize]) -> Result<String, String> {
     Ok(out)
 }
 
-/// One table per class pair: F = −F0 for r < σ, −F0(1 − (r − σ)/D0) up to σ + D0 (F0 = 1,
-/// the force unit), energy its integral from the cutoff.
-fn tables(class_d: &[f64], d0: f64) -> String {
-    let mut s = String::from("# GRC07 attraction per class pair (grainbench bench-only deck)\n");
-    let k = class_d.len();
-    for i in 0..k {
-        for j in i..k {
-            let sigma = 0.5 * (class_d[i] + class_d[j]);
-            let (lo, hi) = (0.5 * sigma, sigma + d0);
-            let _ = write!(
-                s,
-                "\nC_{}_{}\nN {POINTS} R {} {}\n\n",
-                i + 1,
-                j + 1,
-                num(lo),
-                num(hi)
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// LAMMPS `pair_style table linear` on a matching RSQ table: F/r interpolated linearly in
+    /// r² between the points (pair_table.cpp, `compute_table` and `compute`).
+    fn lammps_force(lo: f64, hi: f64, sigma: f64, d0: f64, r: f64) -> f64 {
+        let inner = lo * lo;
+        let delta = (hi * hi - inner) / (POINTS - 1) as f64;
+        let f_over_r = |p: usize| {
+            let r = (inner + p as f64 * delta).sqrt();
+            attraction(r, sigma, d0).0 / r
+        };
+        let rsq = r * r;
+        let p = ((rsq - inner) / delta) as usize;
+        let frac = (rsq - (inner + p as f64 * delta)) / delta;
+        r * (f_over_r(p) + frac * (f_over_r(p + 1) - f_over_r(p)))
+    }
+
+    /// Across overlaps, the contact kink, the ramp and its end, the interpolated attraction is
+    /// the law to 1e-6 F0 for every pair of the GRC07 size range (d in [a/2, a]).
+    #[test]
+    fn tables_interpolate_to_a_millionth_of_f0() {
+        let d0 = 1e-3;
+        let mut worst: f64 = 0.0;
+        for sigma in [0.5, 0.6875, 0.8, 1.0] {
+            let (lo, hi) = grid(sigma, d0);
+            assert!(
+                lo <= sigma * 0.95 && lo >= sigma / 2.0,
+                "σ = {sigma}: r_lo = {lo}"
             );
-            for p in 0..POINTS {
-                let r = lo + (hi - lo) * p as f64 / (POINTS - 1) as f64;
-                let (e, f) = if r < sigma {
-                    (-0.5 * d0 - (sigma - r), -1.0)
-                } else {
-                    let g = hi - r;
-                    (-0.5 * g * g / d0, -g / d0)
-                };
-                let _ = writeln!(s, "{} {} {} {}", p + 1, num(r), num(e), num(f));
+            assert_eq!(hi, sigma + d0);
+            for k in 0..20_000 {
+                let r = sigma - 0.02 * sigma + (0.02 * sigma + d0) * k as f64 / 20_000.0;
+                let err = (lammps_force(lo, hi, sigma, d0, r) - attraction(r, sigma, d0).0).abs();
+                worst = worst.max(err);
             }
         }
+        assert!(worst < 1e-6, "largest error {worst:e} F0");
     }
-    s
+
+    #[test]
+    fn attraction_is_grc07() {
+        let (sigma, d0) = (0.75, 1e-3);
+        assert_eq!(attraction(0.7, sigma, d0).0, -1.0);
+        assert!((attraction(sigma + 0.25 * d0, sigma, d0).0 + 0.75).abs() < 1e-12);
+        assert_eq!(attraction(sigma + 1.5 * d0, sigma, d0), (0.0, 0.0));
+        // Energy: −dE/dr = F on the ramp, continuous at contact.
+        let (r, h) = (sigma + 0.4 * d0, 1e-9);
+        let de = (attraction(r + h, sigma, d0).1 - attraction(r - h, sigma, d0).1) / (2.0 * h);
+        assert!((de + attraction(r, sigma, d0).0).abs() < 1e-5);
+        assert!(
+            (attraction(sigma, sigma, d0).1 - attraction(sigma - 1e-12, sigma, d0).1).abs() < 1e-9
+        );
+    }
 }

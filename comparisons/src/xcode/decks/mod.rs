@@ -291,13 +291,17 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
 /// The deck of `scene` for `code`, or why it cannot be written.
 pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
     let feats = features(start);
-    let missing: Vec<(Feature, String)> = feats
+    let mut missing: Vec<(Feature, String)> = feats
         .iter()
         .filter_map(|f| match capability::support(code, *f) {
             Support::Unsupported(why) => Some((*f, why.to_string())),
             _ => None,
         })
         .collect();
+    // A code without adhesion need not also be told about continuous sizes.
+    if missing.iter().any(|(f, _)| *f == Feature::Adhesion) {
+        missing.retain(|(f, _)| *f != Feature::AdhesionContinuousSizes);
+    }
     if !missing.is_empty() {
         return Err(Refusal {
             code,
@@ -305,12 +309,12 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
             missing,
         });
     }
-    let adhesive_lammps = start.cohesive() && code == Code::Lammps2025;
+    let adhesive_lammps = start.cohesive() && matches!(code, Code::Lammps | Code::Lammps2025);
     let deviations: Vec<String> = feats
         .iter()
         .filter_map(|f| match capability::support(code, *f) {
             Support::Approximate(why) if adhesive_lammps => {
-                Some(lammps::adhesive_deviation(*f, why))
+                Some(lammps::adhesive_deviation(*f, why, code))
             }
             Support::Approximate(why) => Some(format!("{}: {why}", f.key())),
             _ => None,
