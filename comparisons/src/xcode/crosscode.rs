@@ -13,7 +13,11 @@ use std::path::Path;
 /// Metrics shown in the terminal table (the files carry all of them).
 pub const TABLE_METRICS: &[&str] = &[
     "phi", "z", "z_star", "x0", "pressure", "Z2", "X1", "M1", "M2", "Q6", "z_plus", "z_minus",
+    "z_zero", "clusters",
 ];
+
+/// Also shown for cohesive scenes: fractions of grains with 1–4 interactions (GRC07 T.V–T.VI).
+pub const COHESIVE_TABLE_METRICS: &[&str] = &["xk1", "xk2", "xk3", "xk4"];
 
 /// What became of one code's run.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -343,8 +347,11 @@ impl Comparison {
             s.push_str(" --- |");
         }
         s.push_str(" --- |\n");
+        let cohesive = self.rows.iter().any(|r| r.metric == "z_plus");
         for r in &self.rows {
-            if !all_metrics && !TABLE_METRICS.contains(&r.metric.as_str()) {
+            let shown = TABLE_METRICS.contains(&r.metric.as_str())
+                || (cohesive && COHESIVE_TABLE_METRICS.contains(&r.metric.as_str()));
+            if !all_metrics && !shown {
                 continue;
             }
             let paper = match (r.paper, r.paper_sd) {
@@ -528,5 +535,30 @@ mod tests {
         );
         assert_eq!(t.failures.len(), 1);
         assert!(t.to_markdown(false).contains("Failed checks"));
+    }
+
+    /// Cohesive scenes show the split of z, the cluster count and x_1..x_4; others do not.
+    #[test]
+    fn cohesive_rows_in_the_terminal_table() {
+        let bands = Bands::embedded();
+        let with = |keys: &[(&str, f64)]| {
+            let mut r = result("rust", 0.7, 0.01);
+            for (k, v) in keys {
+                r.metrics.insert(k.to_string(), *v);
+            }
+            build("s", 10, None, vec![r], &bands).to_markdown(false)
+        };
+        let md = with(&[
+            ("z_plus", 1.4),
+            ("z_zero", 0.3),
+            ("clusters", 1.0),
+            ("xk2", 0.25),
+            ("xk9", 0.0),
+        ]);
+        for row in ["| z_zero |", "| clusters |", "| xk2 |"] {
+            assert!(md.contains(row), "{row} missing:\n{md}");
+        }
+        assert!(!md.contains("| xk9 |"));
+        assert!(!with(&[("xk2", 0.25)]).contains("| xk2 |"));
     }
 }
