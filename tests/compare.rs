@@ -90,7 +90,14 @@ fn unsupported_features_are_refused_with_what_is_missing() {
         .assert()
         .success();
     let stderr = String::from_utf8_lossy(&assert.get_output().stderr);
-    assert!(stderr.contains("adhesion unsupported"), "{stderr}");
+    // Continuous sizes: LAMMPS 2021 writes the attraction and rolling resistance per pair of
+    // atom types, and says how to get classes.
+    assert!(
+        stderr.contains("adhesion-continuous-sizes unsupported")
+            && stderr.contains("rolling-continuous-sizes unsupported")
+            && stderr.contains("particles.classes"),
+        "{stderr}"
+    );
     let refused = std::fs::read_to_string(out.join("lammps/refused.txt")).unwrap();
     assert!(refused.contains("lammps cannot run it"), "{refused}");
     assert!(!out.join("lammps/in.lammps").exists());

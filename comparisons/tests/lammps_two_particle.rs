@@ -94,8 +94,18 @@ fn run(start: &Start, code: Code) -> (f64, Vec<f64>, Vec<f64>) {
 /// Writes the deck of `start` for `code` into a temporary directory, runs it, and reads its
 /// final state back: (directory, what the reader found, the LAMMPS log).
 fn run_deck(start: &Start, code: Code) -> (tempfile::TempDir, import::Raw, String) {
+    run_edited_deck(start, code, |_| {})
+}
+
+/// [`run_deck`] with the deck's files edited first (what a [`Start`] cannot say: spins).
+fn run_edited_deck(
+    start: &Start,
+    code: Code,
+    edit: impl Fn(&mut Vec<(String, String)>),
+) -> (tempfile::TempDir, import::Raw, String) {
     let dir = tempfile::tempdir().expect("tempdir");
-    let deck = decks::deck(start, code).expect("deck");
+    let mut deck = decks::deck(start, code).expect("deck");
+    edit(&mut deck.files);
     for (name, text) in &deck.files {
         std::fs::write(dir.path().join(name), text).unwrap();
     }
@@ -513,4 +523,132 @@ criteria = {{ preset = "grc07" }}
         rel(t2, want)
     );
     assert!(rel(t2, want) < 1e-3, "T {t2} vs {want}");
+}
+
+/// GRC07 rolling resistance (issue 14) as `rolling sds` per pair of diameter classes, both
+/// LAMMPS versions: two heavy disks (d = 1 and 0.6, two atom types) in contact, spun in pure
+/// rolling (ω_1 R_1 = −ω_2 R_2: no slip, so no tangential force) for k steps. The moment on disk
+/// 2 is our law's, K_r·θ with θ the relative rotation, to 1e-3; with a small μ_r it is capped at
+/// μ_r·N (N = K_N h at rest: the total normal force LAMMPS caps with is the elastic one here).
+#[test]
+fn lammps_two_particle_rolling() {
+    rolling(Code::Lammps);
+}
+
+#[test]
+fn lammps_2025_two_particle_rolling() {
+    rolling(Code::Lammps2025);
+}
+
+fn rolling(code: Code) {
+    use grainbench_engine::contact::linear::{Linear, NoCohesion};
+    use grainbench_engine::contact::slider::{Coulomb, RollingSpring};
+    use grainbench_engine::contact::{ContactLaw, Pair};
+    use grainbench_engine::geometry::{Dim, D2};
+    type V2 = <D2 as Dim>::V;
+    if !common::present(code) {
+        return;
+    }
+    let (kn, kr, mu, h) = (1e4, 1e-4, 0.5, 5e-4);
+    let (d1, d2) = (1.0, 0.6);
+    let heavy = 1e4;
+    let (k, dt, w1) = (100u64, 1e-4, 0.01);
+    let w2 = -w1 * d1 / d2;
+    for mu_r in [5e-3, 1e-5] {
+        let text = format!(
+            r#"
+name = "lammps-two-rolling-disks"
+description = "two disks with rolling resistance"
+dimension = 2
+seed = 1
+[particles]
+count = 2
+min_diameter = 0.6
+[initial]
+packing_fraction = 0.01
+[law]
+kind = "linear"
+kappa = {kn}
+mu = {mu}
+zeta = 0.0
+rolling = {{ kr = {kr}, mu_r = {mu_r} }}
+[[protocol]]
+kind = "compress"
+pressure = 1.0
+inertia_cap = 0.01
+max_time = 10.0
+criteria = {{ preset = "ar07" }}
+"#
+        );
+        let scene = Scene::from_toml(&text, Path::new("lammps-two-rolling-disks.toml")).unwrap();
+        let mut st = start(0.0, [0.0; 3], [0.0; 3], 1.0, k, dt);
+        st.scene = scene;
+        st.dimension = 2;
+        st.lengths.truncate(2);
+        st.diameter = vec![d1, d2];
+        st.mass = vec![heavy * d1 * d1, heavy * d2 * d2];
+        st.inertia = vec![0.125 * st.mass[0] * d1 * d1, 0.125 * st.mass[1] * d2 * d2];
+        st.velocity = vec![vec![0.0; 2], vec![0.0; 2]];
+        st.position = vec![vec![9.0, 10.0], vec![9.0 + 0.5 * (d1 + d2) - h, 10.0]];
+        st.stages[0].kappa = kn;
+        st.stages[0].mu = Mu::Finite(mu);
+        // Spins in the data file (a Start has none), torques in the final dump.
+        let (dir, raw, log) = run_edited_deck(&st, code, |files| {
+            for (name, text) in files.iter_mut() {
+                if name == "in.lammps" {
+                    *text = text.replace(
+                        "omegax omegay omegaz fx fy fz ",
+                        "omegax omegay omegaz fx fy fz tqx tqy tqz ",
+                    );
+                } else if name == "data.lammps" {
+                    if !text.contains("Velocities") {
+                        text.push_str("\nVelocities\n\n1 0 0 0 0 0 0\n2 0 0 0 0 0 0\n");
+                    }
+                    *text = text
+                        .replace("\n1 0 0 0 0 0 0\n", &format!("\n1 0 0 0 0 0 {w1}\n"))
+                        .replace("\n2 0 0 0 0 0 0\n", &format!("\n2 0 0 0 0 0 {w2}\n"));
+                }
+            }
+        });
+        assert!(log.contains("rolling sds"), "{log}");
+        assert_eq!(raw.contacts.len(), 1, "{:?}", raw.contacts);
+        let p = dir.path().join("final.atoms");
+        let atoms = last_dump_frame(&p).unwrap();
+        let (cid, ctq) = (atoms.col(&p, "id").unwrap(), atoms.col(&p, "tqz").unwrap());
+        let tq2 = atoms.rows.iter().find(|r| r[cid] == 2.0).unwrap()[ctq];
+        // Ours: the law stepped k times (the dump's `run 0` recomputes without updating).
+        let law: Linear<NoCohesion, Coulomb, RollingSpring> = Linear {
+            kn,
+            kt: kn,
+            zeta: 0.0,
+            zeta_t: 0.0,
+            cohesion: NoCohesion,
+            friction: Coulomb { mu },
+            rolling: RollingSpring { kr: kr * kn, mu_r },
+        };
+        let (r1, r2) = (0.5 * d1, 0.5 * d2);
+        let pair = Pair::<D2> {
+            n: V2::new(1.0, 0.0),
+            gap: -h,
+            v_contact: V2::new(0.0, 0.0),
+            w_i: w1,
+            w_j: w2,
+            r_eff: r1 * r2 / (r1 + r2),
+            m_eff: heavy * (d1 * d1 * d2 * d2) / (d1 * d1 + d2 * d2),
+        };
+        let mut hist = Default::default();
+        let mut ours = 0.0;
+        for _ in 0..k {
+            ours = ContactLaw::<D2>::interact(&law, &pair, &mut hist, dt).rolling;
+        }
+        let capped = (kr * kn * (w2 - w1) * k as f64 * dt).abs() > mu_r * kn * h;
+        eprintln!(
+            "{code} rolling (μ_r = {mu_r}, capped: {capped}): moment on disk 2 {tq2}, ours {ours}, rel {:.2e}",
+            rel(tq2, ours)
+        );
+        assert!(rel(tq2, ours) < 1e-3, "moment {tq2} vs ours {ours}");
+        if capped {
+            assert!((ours.abs() - mu_r * kn * h).abs() < 1e-12);
+        }
+    }
 }

@@ -173,7 +173,7 @@ impl Analysis {
     /// comparing with the papers. Keys whose metric is undefined for this snapshot (Q6 in
     /// 2D, z± without cohesion, N^(2) without divalent grains, …) are left out.
     ///
-    /// `phi`, `z`, `z_star`, `x0`, `xk2`…`xk12` (x_k, variant I), `xk2_II`…`xk12_II`,
+    /// `phi`, `z`, `z_star`, `x0`, `xk1` (cohesive only), `xk2`…`xk12` (x_k, variant I), `xk2_II`…`xk12_II`,
     /// `mean_N`, `Z2`, `Z5_3`, `X1`, `M1`, `M2`, `N_2`, `X1_2`, `M1_2`, `M2_2`, `N_3`, `X1_3`,
     /// `M1_3`, `M2_3`, `Q4`, `Q6`, `Q4loc`, `Q6loc`, `Z_bond`, `Z_cr`, `Q6loc_cr`, `x_cr`,
     /// `n_cr`, `z_plus`, `z_minus`, `z_zero`, `clusters`, `pressure` (measured).
@@ -188,7 +188,10 @@ impl Analysis {
         put("z", Some(self.z));
         put("z_star", self.z_backbone);
         put("x0", Some(self.rattler_fraction));
-        for k in 2..=12 {
+        // x_1 counts for cohesive packings only (one-interaction grains hold by adhesion;
+        // without it they are rattlers).
+        let k_min = if self.cohesive_split.is_some() { 1 } else { 2 };
+        for k in k_min..=12 {
             put(
                 &format!("xk{k}"),
                 Some(self.x_k.get(k).copied().unwrap_or(0.0)),

@@ -401,6 +401,7 @@ fn reports() {
 /// Every key [`Analysis::metric_values`] may return, as listed in its documentation.
 fn canonical_keys() -> Vec<String> {
     let mut k: Vec<String> = ["phi", "z", "z_star", "x0"].map(String::from).to_vec();
+    k.push("xk1".into());
     k.extend((2..=12).map(|i| format!("xk{i}")));
     k.extend((2..=12).map(|i| format!("xk{i}_II")));
     k.extend(

@@ -64,6 +64,9 @@ pub enum Feature {
     AdhesionContinuousSizes,
     /// Rolling spring K_r with cap μ_r N_e (GRC07 (9)–(10)).
     Rolling,
+    /// Rolling resistance between grains of more than [`MAX_CLASSES`](super::lammps_table::MAX_CLASSES)
+    /// distinct diameters: K_r and μ_r become per-pair coefficients through R*.
+    RollingContinuousSizes,
     /// Tangential/rolling viscosity (grainbench option, not in GRC07).
     TangentialDamping,
     /// Disks in 2D.
@@ -91,7 +94,7 @@ pub enum Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 23] = [
+    pub const ALL: [Feature; 24] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -103,6 +106,7 @@ impl Feature {
         Feature::Adhesion,
         Feature::AdhesionContinuousSizes,
         Feature::Rolling,
+        Feature::RollingContinuousSizes,
         Feature::TangentialDamping,
         Feature::Disks,
         Feature::Polydisperse,
@@ -130,6 +134,7 @@ impl Feature {
             Feature::Adhesion => "adhesion",
             Feature::AdhesionContinuousSizes => "adhesion-continuous-sizes",
             Feature::Rolling => "rolling-resistance",
+            Feature::RollingContinuousSizes => "rolling-continuous-sizes",
             Feature::TangentialDamping => "tangential-damping",
             Feature::Disks => "disks-2d",
             Feature::Polydisperse => "polydisperse",
@@ -158,6 +163,7 @@ impl Feature {
             Feature::Adhesion => "pull -F0 in contact, linear attraction over D0 (GRC07 (4)-(5))",
             Feature::AdhesionContinuousSizes => "adhesion between continuously distributed diameters (more than 16 distinct; `particles.classes` gives classes)",
             Feature::Rolling => "rolling spring K_r, cap μ_r N_e (GRC07 (9)-(10))",
+            Feature::RollingContinuousSizes => "rolling resistance between continuously distributed diameters (more than 16 distinct; `particles.classes` gives classes)",
             Feature::TangentialDamping => "tangential/rolling viscosity (grainbench option)",
             Feature::Disks => "2D disks",
             Feature::Polydisperse => "diameters uniform in [d_min a, a]",
@@ -208,6 +214,9 @@ pub fn features(start: &Start) -> Vec<Feature> {
             }
             if rolling.is_some() {
                 f.push(Feature::Rolling);
+                if Classes::of(start).is_none() {
+                    f.push(Feature::RollingContinuousSizes);
+                }
             }
             if *tangential_damping > 0.0 {
                 f.push(Feature::TangentialDamping);
@@ -263,6 +272,8 @@ pub fn features(start: &Start) -> Vec<Feature> {
 const RELAX: &str =
     "the switch to background damping on a settled interaction list is not generated";
 
+const NO_ROLLING: &str = "no rolling resistance at all (see `rolling-resistance`)";
+
 const NO_GRC07_ADHESION: &str = "no GRC07 adhesion at all (see `adhesion`)";
 
 const INTERLUDE: &str = "no event-driven hard-grain dynamics; grainbench prepares hard-grain stages only before the first DEM stage";
@@ -286,7 +297,8 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Adhesion => Exact,
             F::AdhesionContinuousSizes if code == Code::Lammps2025 => Exact,
             F::AdhesionContinuousSizes => Unsupported("pair_style table sees only r and the atom types, so the attraction is one table per pair of diameter classes: give the scene `particles.classes` (at most 16)"),
-            F::Rolling => Unsupported("rolling sds needs K_r/R_eff² and μ_r/R_eff per type pair; not generated yet for a continuous size distribution"),
+            F::Rolling => Approximate("`rolling sds` per pair of diameter classes, k_roll = K_r/R*², μ_roll = μ_r/R*: the moment cap uses the total normal force (damping included)"),
+            F::RollingContinuousSizes => Unsupported("`rolling sds` takes K_r/R*² and μ_r/R* per pair of atom types: give the scene `particles.classes` (at most 16)"),
             F::TangentialDamping => Unsupported("tangential damping in `linear_history` is not generated"),
             F::StressControl => Approximate("fix press/berendsen aniso on the virial stress: each axis' strain rate is (P − σ_αα)/(3Bτ), at the cap only while σ_αα ≈ 0, no cell mass"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
@@ -306,6 +318,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Adhesion => Unsupported("cohesion sjkr/sjkr2 give a force ∝ contact area, zero at first touch, with no range"),
             F::AdhesionContinuousSizes => Unsupported(NO_GRC07_ADHESION),
             F::Rolling => Unsupported("rolling_friction epsd3 not generated"),
+            F::RollingContinuousSizes => Unsupported(NO_ROLLING),
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),
             F::Disks => Unsupported("2D decks not generated for LIGGGHTS"),
             F::StressControl => Approximate("no barostat fix: per-axis servo of fix deform, strain rate ∝ virial stress error (full cap beyond 50 % of the target), no cell mass"),
@@ -326,6 +339,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Adhesion => Unsupported("CohFrictMat gives a spring to −F0 then constant −F0 (not generated)"),
             F::AdhesionContinuousSizes => Unsupported(NO_GRC07_ADHESION),
             F::Rolling => Unsupported("moment law not generated"),
+            F::RollingContinuousSizes => Unsupported(NO_ROLLING),
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),
             F::Disks => Unsupported("2D disks (blockedDOFs emulation) not generated"),
             F::StressControl => Approximate("AR07 (7) cell dynamics and rate cap integrated by a script servo (PyRunner each step, O.cell.velGrad) on the contact stress only; PeriTriaxController hunted around 1.01–1.09 P"),

@@ -138,7 +138,7 @@ fn pair_style(start: &Start, code: Code) -> String {
 /// `pair_coeff * * …` lines of the scene's law at stiffness parameter `kappa` and friction
 /// `mu`; `zeta_t` > 0 adds a tangential dashpot of that fraction of critical (linear law:
 /// `linear_history`'s damping is x_t times the normal one, 2ζ√(m* K_N), so x_t = ζ_t√K_T/(ζ√K_N)).
-fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code, zeta_t: f64) -> String {
+fn pair_coeff(start: &Start, kappa: f64, mu: Mu, code: Code, zeta_t: f64) -> String {
     let tangential = |kt: &str, damp: f64| -> String {
         if mu.value() > 0.0 {
             let damp = if damp > 0.0 { num(damp) } else { "0.0".into() };
@@ -147,7 +147,7 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code, zeta_t: f64) -> String 
             "tangential linear_nohistory 0.0 0.0".into()
         }
     };
-    match law {
+    match start.law() {
         Law::HertzMindlin { zeta, poisson, .. } => {
             // κ = (Ẽ/P)^(2/3) with P = 1 (AR07 (21)).
             let e_tilde = kappa.powf(1.5);
@@ -168,6 +168,7 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code, zeta_t: f64) -> String 
             zeta,
             kt_over_kn,
             cohesion,
+            rolling,
             ..
         } => {
             // κ = K_N/P (cohesionless, P = 1) or K_N a/F0 (cohesive, F0 = 1).
@@ -179,21 +180,91 @@ fn pair_coeff(law: &Law, kappa: f64, mu: Mu, code: Code, zeta_t: f64) -> String 
             };
             let t = tangential(&format!("linear_history {}", num(kappa * kt_over_kn)), xt);
             let granular = format!("hooke {} {} {t} damping {model}", num(kappa), num(e));
+            let sub = if cohesion.is_some() { "granular " } else { "" };
+            // Rolling resistance: `rolling sds` per pair of diameter classes ([`rolling_sds`]).
+            let granular_lines = match (rolling, type_classes(start, code)) {
+                (Some(r), Some(classes)) => {
+                    let mut lines = Vec::new();
+                    for i in 0..classes.len() {
+                        for j in i..classes.len() {
+                            let (k, g, m) = rolling_sds(
+                                &classes,
+                                start.dimension,
+                                (i, j),
+                                r.kr * kappa,
+                                r.mu_r,
+                                zeta_t,
+                            );
+                            lines.push(format!(
+                                "pair_coeff {} {} {sub}{granular} rolling sds {} {} {}",
+                                i + 1,
+                                j + 1,
+                                num(k),
+                                num(g),
+                                num(m)
+                            ));
+                        }
+                    }
+                    lines.join("\n")
+                }
+                _ => format!("pair_coeff * * {sub}{granular}"),
+            };
             match cohesion {
-                None => format!("pair_coeff * * {granular}"),
-                // The tables' pair_coeff lines come with the pair_style ([`pair_style`]); a
-                // granular line given again keeps its place in hybrid/overlay's list.
-                Some(_) if code == Code::Lammps => format!("pair_coeff * * granular {granular}"),
+                // LAMMPS 2021: the tables' pair_coeff lines come with the pair_style
+                // ([`pair_style`]); a granular line given again keeps its place in
+                // hybrid/overlay's list.
+                None => granular_lines,
+                Some(_) if code == Code::Lammps => granular_lines,
                 // lepton/sphere first: hybrid/overlay's copy_svector (LAMMPS 2025) passes on
                 // the extra values (`compute pair/local p1 p2 p3`, the tangential force) of the
                 // last sub-style given to a type pair only.
                 Some(c) => format!(
-                    "pair_coeff * * lepton/sphere \"{}\"\npair_coeff * * granular {granular}",
+                    "pair_coeff * * lepton/sphere \"{}\"\n{granular_lines}",
                     lepton_attraction(1.0, c.d0)
                 ),
             }
         }
     }
+}
+
+/// The diameter classes that become atom types: with LAMMPS 2021 adhesion (one table per type
+/// pair) or rolling resistance (`rolling sds` coefficients per type pair); `None` otherwise
+/// (one type).
+fn type_classes(start: &Start, code: Code) -> Option<Classes> {
+    let rolling = matches!(
+        start.law(),
+        Law::Linear {
+            rolling: Some(_),
+            ..
+        }
+    );
+    if (start.cohesive() && code == Code::Lammps) || rolling {
+        Classes::of(start)
+    } else {
+        None
+    }
+}
+
+/// `rolling sds` (k_roll, γ_roll, μ_roll) for classes (i, j): LAMMPS integrates a rolling
+/// displacement ξ with dξ/dt = R*(ω_i − ω_j) × n and exerts the moment R* n × F_r, F_r = −k_roll ξ
+/// − γ_roll dξ/dt capped at μ_roll·|N| (pair_granular.cpp), i.e. Γ = k_roll R*² θ: GRC07 (9)–(10)
+/// with K_r (`kr`) and μ_r are k_roll = K_r/R*², μ_roll = μ_r/R* — the cap on LAMMPS's total normal
+/// force, damping included, where ours has N_e. The relaxation's rolling dashpot
+/// η_r = 2ζ_t√(K_r m*) R* (engine/src/contact/linear.rs) is γ_roll = η_r/R*².
+fn rolling_sds(
+    classes: &Classes,
+    dimension: usize,
+    (i, j): (usize, usize),
+    kr: f64,
+    mu_r: f64,
+    zeta_t: f64,
+) -> (f64, f64, f64) {
+    let (di, dj) = (classes.diameter[i], classes.diameter[j]);
+    let r_eff = 0.25 * di * dj / (0.5 * (di + dj));
+    let (mi, mj) = (di.powi(dimension as i32), dj.powi(dimension as i32));
+    let m_eff = mi * mj / (mi + mj);
+    let eta = 2.0 * zeta_t * (kr * m_eff).sqrt() * r_eff;
+    (kr / (r_eff * r_eff), eta / (r_eff * r_eff), mu_r / r_eff)
 }
 
 /// Gain g of the adhesive decks' first-order servo, per-axis rate g·(σ_αα − P)/P: 2·cap (full
@@ -269,22 +340,17 @@ pub fn adhesive_deviation(f: super::Feature, why: &str, code: Code) -> String {
 
 /// The LAMMPS deck of `start` for `code` (either LAMMPS version).
 pub fn deck(start: &Start, code: Code, deviations: &[String]) -> Deck {
-    // LAMMPS 2021 adhesion: one atom type per diameter class, the attraction in tables.
-    let classes = match start.law().cohesion() {
-        Some(c) if code == Code::Lammps => Classes::of(start).map(|k| (k, c.d0)),
-        _ => None,
-    };
+    // One atom type per diameter class where coefficients depend on the pair (LAMMPS 2021
+    // adhesion: the attraction in tables; rolling resistance).
+    let types = type_classes(start, code);
     let mut files = vec![
         ("in.lammps".into(), input(start, code, deviations)),
-        (
-            "data.lammps".into(),
-            data(start, classes.as_ref().map(|k| &k.0)),
-        ),
+        ("data.lammps".into(), data(start, types.as_ref())),
     ];
-    if let Some((k, d0)) = &classes {
+    if let (Some(c), Some(k), Code::Lammps) = (start.law().cohesion(), &types, code) {
         files.push((
             TABLE.into(),
-            tables(k, *d0, &format!("scene {}", start.scene.name)),
+            tables(k, c.d0, &format!("scene {}", start.scene.name)),
         ));
     }
     Deck {
@@ -421,9 +487,9 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         coeff = start
             .stages
             .first()
-            .map(|st| pair_coeff(start.law(), st.kappa, st.mu, code, 0.0))
+            .map(|st| pair_coeff(start, st.kappa, st.mu, code, 0.0))
             .unwrap_or_else(|| {
-                pair_coeff(start.law(), start.law().kappa(), Mu::Finite(0.0), code, 0.0)
+                pair_coeff(start, start.law().kappa(), Mu::Finite(0.0), code, 0.0)
             }),
         style = pair_style(start, code),
         // With adhesion every pair within the cut-off (distant attractions included); the
@@ -439,7 +505,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         let _ = writeln!(s, "\n# Stage {k1}: {:?}", st.kind);
         let _ = writeln!(s, "timestep {}", num(st.dt));
         if k > 0 {
-            let _ = writeln!(s, "{}", pair_coeff(start.law(), st.kappa, st.mu, code, 0.0));
+            let _ = writeln!(s, "{}", pair_coeff(start, st.kappa, st.mu, code, 0.0));
         }
         let mut crit = vec![
             format!("(c_fmax[1]<{})", num(tol.force)),
@@ -586,8 +652,8 @@ fn relaxed_stage(
     } else {
         "v_ek"
     };
-    let damped = pair_coeff(start.law(), st.kappa, st.mu, code, relax.tangential_zeta);
-    let plain = pair_coeff(start.law(), st.kappa, st.mu, code, 0.0);
+    let damped = pair_coeff(start, st.kappa, st.mu, code, relax.tangential_zeta);
+    let plain = pair_coeff(start, st.kappa, st.mu, code, 0.0);
     let _ = write!(
         s,
         "# Final relaxation (relax = {{ damping = {gamma}, tangential_zeta = {zt}, settle_time = {st_time}, free_rollers = {fr} }}).\n\
@@ -764,5 +830,56 @@ mod tests {
             .deviations
             .iter()
             .any(|d| d.starts_with("stress-control: fix deform with variable box lengths")));
+    }
+
+    /// Rolling resistance on a class scene: one `rolling sds` line per pair of classes, with
+    /// k_roll = K_r/R*² and μ_roll = μ_r/R*, in both versions; the relaxation's lines carry
+    /// γ_roll = 2ζ_t√(K_r m*)/R*.
+    #[test]
+    fn rolling_resistance_is_per_class_pair() {
+        let mut scene = grainbench_engine::library::scene("xcode-cohesive-classes-smoke")
+            .unwrap()
+            .unwrap();
+        if let Law::Linear { rolling, .. } = &mut scene.law {
+            *rolling = Some(grainbench_engine::scene::Rolling {
+                kr: 1e-4,
+                mu_r: 0.005,
+            });
+        }
+        let start = Start::of(&scene).unwrap();
+        for code in [Code::Lammps, Code::Lammps2025] {
+            let deck = super::super::deck(&start, code).unwrap();
+            let input = &deck.files[0].1;
+            // Classes 1 and 5 (d = 0.5 and 1): R* = 0.25·0.5/0.75 = 1/6, K_r = 1e-4·1e4 = 1.
+            let classes = Classes::of(&start).unwrap();
+            let (k, g0, m) = rolling_sds(&classes, 2, (0, 4), 1.0, 0.005, 0.0);
+            assert!((k - 36.0).abs() < 1e-9 && g0 == 0.0 && (m - 0.03).abs() < 1e-12);
+            let line = format!(
+                "pair_coeff 1 5 granular hooke 1e4 {} tangential linear_history 1e4 0.0 5e-1 damping {} rolling sds {} 0 {}",
+                num(damping(code, 1.6, false).1),
+                damping(code, 1.6, false).0,
+                num(k),
+                num(m)
+            );
+            assert!(
+                input.contains(&line),
+                "{code}: missing `{line}` in {:?}",
+                input
+                    .lines()
+                    .filter(|l| l.starts_with("pair_coeff 1 5"))
+                    .collect::<Vec<_>>()
+            );
+            // Stage start, damped and plain again in the relaxation: 3 × 15 pairs.
+            let lines = input
+                .lines()
+                .filter(|l| l.starts_with("pair_coeff") && l.contains(" rolling sds "))
+                .count();
+            assert_eq!(lines, 3 * 15, "{code}");
+            // Relaxation: m* = 0.25·1/1.25 = 0.2, γ_roll = 2·0.5·√0.2·6.
+            let gamma = 2.0 * 0.5 * 0.2f64.sqrt() * 6.0;
+            let (_, g, _) = rolling_sds(&classes, 2, (0, 4), 1.0, 0.005, 0.5);
+            assert!((g - gamma).abs() < 1e-12);
+            assert!(input.contains(&format!("rolling sds {} {} {}", num(k), num(g), num(m))));
+        }
     }
 }

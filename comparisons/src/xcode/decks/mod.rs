@@ -298,9 +298,14 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
             _ => None,
         })
         .collect();
-    // A code without adhesion need not also be told about continuous sizes.
-    if missing.iter().any(|(f, _)| *f == Feature::Adhesion) {
-        missing.retain(|(f, _)| *f != Feature::AdhesionContinuousSizes);
+    // A code without adhesion (rolling resistance) need not also be told about continuous sizes.
+    for (base, sizes) in [
+        (Feature::Adhesion, Feature::AdhesionContinuousSizes),
+        (Feature::Rolling, Feature::RollingContinuousSizes),
+    ] {
+        if missing.iter().any(|(f, _)| *f == base) {
+            missing.retain(|(f, _)| *f != sizes);
+        }
     }
     if !missing.is_empty() {
         return Err(Refusal {
