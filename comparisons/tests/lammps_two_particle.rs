@@ -376,6 +376,30 @@ criteria = {{ preset = "ar07" }}
     assert!(rel(t[1], want) < 1e-3);
 }
 
+/// Two disks of diameters `d` and masses `heavy`·d² at rest along x with surface gap `gap`
+/// (negative: overlap) in a 20² cell, stage stiffness and friction `(kn, mu)`; no steps.
+fn unequal_disks(
+    scene: &Scene,
+    d: (f64, f64),
+    heavy: f64,
+    gap: f64,
+    (kn, mu): (f64, f64),
+) -> Start {
+    let (d1, d2) = d;
+    let mut st = start(0.0, [0.0; 3], [0.0; 3], 1.0, 0, 1e-4);
+    st.scene = scene.clone();
+    st.dimension = 2;
+    st.lengths.truncate(2);
+    st.diameter = vec![d1, d2];
+    st.mass = vec![heavy * d1 * d1, heavy * d2 * d2];
+    st.inertia = vec![0.125 * st.mass[0] * d1 * d1, 0.125 * st.mass[1] * d2 * d2];
+    st.velocity = vec![vec![0.0; 2], vec![0.0; 2]];
+    st.position = vec![vec![9.0, 10.0], vec![9.0 + 0.5 * (d1 + d2) + gap, 10.0]];
+    st.stages[0].kappa = kn;
+    st.stages[0].mu = Mu::Finite(mu);
+    st
+}
+
 /// GRC07 adhesive law (issue 14) in LAMMPS 2025: `hybrid/overlay granular lepton/sphere`, two
 /// unequal disks (d = 1 and 0.6) at rest at overlaps and gaps across the attraction range and
 /// approaching at v: the total normal force is ours (K_N δ + 2ζ√(m* K_N)·v − F0 in contact,
@@ -433,21 +457,12 @@ criteria = {{ preset = "grc07" }}
     let (m1, m2) = (d1 * d1, d2 * d2);
     let m_eff = m1 * m2 / (m1 + m2);
     let disks = |gap: f64, v: f64| {
-        let mut st = start(0.0, [0.0; 3], [0.0; 3], 1.0, 0, 1e-4);
-        st.scene = scene.clone();
-        st.dimension = 2;
-        st.lengths.truncate(2);
-        st.diameter = vec![d1, d2];
-        st.mass = vec![m1, m2];
-        st.inertia = vec![0.125 * m1 * d1 * d1, 0.125 * m2 * d2 * d2];
+        let mut st = unequal_disks(&scene, (d1, d2), 1.0, gap, (kn, mu));
         // Approaching at v with no net momentum.
         st.velocity = vec![
             vec![v * m2 / (m1 + m2), 0.0],
             vec![-v * m1 / (m1 + m2), 0.0],
         ];
-        st.position = vec![vec![9.0, 10.0], vec![9.0 + 0.5 * (d1 + d2) + gap, 10.0]];
-        st.stages[0].kappa = kn;
-        st.stages[0].mu = Mu::Finite(mu);
         st
     };
     let law: Linear<Adhesion, Coulomb, NoRolling> = Linear {
@@ -502,9 +517,7 @@ criteria = {{ preset = "grc07" }}
     // Tangential force through the overlay (the dump's p1..p3): heavy disks (×1e4) sliding
     // past each other at u along y for k steps at overlap 5e-4: T on disk 2 = −K_T·u·k·dt.
     let (u, k, dt) = (1e-2, 100u64, 1e-4);
-    let mut st = disks(-5e-4, 0.0);
-    st.mass = vec![1e4 * m1, 1e4 * m2];
-    st.inertia = vec![1e4 * 0.125 * m1 * d1 * d1, 1e4 * 0.125 * m2 * d2 * d2];
+    let mut st = unequal_disks(&scene, (d1, d2), 1e4, -5e-4, (kn, mu));
     st.velocity = vec![vec![0.0, -u / 2.0], vec![0.0, u / 2.0]];
     st.stages[0].max_steps = k;
     st.stages[0].max_time = k as f64 * dt;
@@ -581,17 +594,10 @@ criteria = {{ preset = "ar07" }}
 "#
         );
         let scene = Scene::from_toml(&text, Path::new("lammps-two-rolling-disks.toml")).unwrap();
-        let mut st = start(0.0, [0.0; 3], [0.0; 3], 1.0, k, dt);
-        st.scene = scene;
-        st.dimension = 2;
-        st.lengths.truncate(2);
-        st.diameter = vec![d1, d2];
-        st.mass = vec![heavy * d1 * d1, heavy * d2 * d2];
-        st.inertia = vec![0.125 * st.mass[0] * d1 * d1, 0.125 * st.mass[1] * d2 * d2];
-        st.velocity = vec![vec![0.0; 2], vec![0.0; 2]];
-        st.position = vec![vec![9.0, 10.0], vec![9.0 + 0.5 * (d1 + d2) - h, 10.0]];
-        st.stages[0].kappa = kn;
-        st.stages[0].mu = Mu::Finite(mu);
+        let mut st = unequal_disks(&scene, (d1, d2), heavy, -h, (kn, mu));
+        st.stages[0].max_steps = k;
+        st.stages[0].max_time = k as f64 * dt;
+        st.stages[0].dt = dt;
         // Spins in the data file (a Start has none), torques in the final dump.
         let (dir, raw, log) = run_edited_deck(&st, code, |files| {
             for (name, text) in files.iter_mut() {
