@@ -280,7 +280,7 @@ fn adhesive_scene_runs_the_bench_only_lammps_deck() {
         .any(|d| d.as_str().unwrap().contains("bench-only")));
     let input = std::fs::read_to_string(out.join("runs/lammps-j1-1/in.lammps")).unwrap();
     assert!(input.contains("pair_style hybrid/overlay granular table linear"));
-    assert!(input.contains("pair_coeff 1 5 table cohesion.table C_1_5"));
+    assert!(input.contains("pair_coeff 1 5 table cohesion-snapped.table C_1_5"));
 }
 
 #[test]
