@@ -377,16 +377,17 @@ criteria = {{ preset = "ar07" }}
 }
 
 /// Two disks of diameters `d` and masses `heavy`·d² at rest along x with surface gap `gap`
-/// (negative: overlap) in a 20² cell, stage stiffness and friction `(kn, mu)`; no steps.
+/// (negative: overlap) in a 20² cell, stage stiffness and friction `(kn, mu)`, `steps` steps of `dt`.
 fn unequal_disks(
     scene: &Scene,
     d: (f64, f64),
     heavy: f64,
     gap: f64,
     (kn, mu): (f64, f64),
+    (steps, dt): (u64, f64),
 ) -> Start {
     let (d1, d2) = d;
-    let mut st = start(0.0, [0.0; 3], [0.0; 3], 1.0, 0, 1e-4);
+    let mut st = start(0.0, [0.0; 3], [0.0; 3], 1.0, steps, dt);
     st.scene = scene.clone();
     st.dimension = 2;
     st.lengths.truncate(2);
@@ -457,7 +458,7 @@ criteria = {{ preset = "grc07" }}
     let (m1, m2) = (d1 * d1, d2 * d2);
     let m_eff = m1 * m2 / (m1 + m2);
     let disks = |gap: f64, v: f64| {
-        let mut st = unequal_disks(&scene, (d1, d2), 1.0, gap, (kn, mu));
+        let mut st = unequal_disks(&scene, (d1, d2), 1.0, gap, (kn, mu), (0, 1e-4));
         // Approaching at v with no net momentum.
         st.velocity = vec![
             vec![v * m2 / (m1 + m2), 0.0],
@@ -517,11 +518,8 @@ criteria = {{ preset = "grc07" }}
     // Tangential force through the overlay (the dump's p1..p3): heavy disks (×1e4) sliding
     // past each other at u along y for k steps at overlap 5e-4: T on disk 2 = −K_T·u·k·dt.
     let (u, k, dt) = (1e-2, 100u64, 1e-4);
-    let mut st = unequal_disks(&scene, (d1, d2), 1e4, -5e-4, (kn, mu));
+    let mut st = unequal_disks(&scene, (d1, d2), 1e4, -5e-4, (kn, mu), (k, dt));
     st.velocity = vec![vec![0.0, -u / 2.0], vec![0.0, u / 2.0]];
-    st.stages[0].max_steps = k;
-    st.stages[0].max_time = k as f64 * dt;
-    st.stages[0].dt = dt;
     let (_dir, raw, _) = run_deck(&st, code);
     assert_eq!(raw.contacts.len(), 1, "{:?}", raw.contacts);
     let c = &raw.contacts[0];
@@ -594,10 +592,7 @@ criteria = {{ preset = "ar07" }}
 "#
         );
         let scene = Scene::from_toml(&text, Path::new("lammps-two-rolling-disks.toml")).unwrap();
-        let mut st = unequal_disks(&scene, (d1, d2), heavy, -h, (kn, mu));
-        st.stages[0].max_steps = k;
-        st.stages[0].max_time = k as f64 * dt;
-        st.stages[0].dt = dt;
+        let st = unequal_disks(&scene, (d1, d2), heavy, -h, (kn, mu), (k, dt));
         // Spins in the data file (a Start has none), torques in the final dump.
         let (dir, raw, log) = run_edited_deck(&st, code, |files| {
             for (name, text) in files.iter_mut() {

@@ -206,15 +206,17 @@ pub fn features(start: &Start) -> Vec<Feature> {
             if *zeta > 0.0 {
                 f.push(Feature::LinearDamping);
             }
+            // More distinct diameters than per-type-pair coefficients can hold.
+            let continuous = Classes::of(start).is_none();
             if cohesion.is_some() {
                 f.push(Feature::Adhesion);
-                if Classes::of(start).is_none() {
+                if continuous {
                     f.push(Feature::AdhesionContinuousSizes);
                 }
             }
             if rolling.is_some() {
                 f.push(Feature::Rolling);
-                if Classes::of(start).is_none() {
+                if continuous {
                     f.push(Feature::RollingContinuousSizes);
                 }
             }

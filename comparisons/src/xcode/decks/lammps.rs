@@ -122,7 +122,7 @@ fn pair_style(start: &Start, code: Code) -> String {
     match start.law().cohesion() {
         None => "pair_style granular".into(),
         Some(c) if code == Code::Lammps => {
-            let classes = Classes::of(start).expect("the matrix refuses continuous sizes");
+            let classes = type_classes(start, code).expect("the matrix refuses continuous sizes");
             pair_lines(&classes, c.d0, TABLE).trim_end().to_string()
         }
         Some(c) => {
@@ -753,14 +753,17 @@ mod tests {
         assert!(e < 0.0 && (tsuji_coefficient(e) - c).abs() < 1e-9);
     }
 
+    /// The common start of an embedded scene.
+    fn library_start(name: &str) -> Start {
+        let scene = grainbench_engine::library::scene(name).unwrap().unwrap();
+        Start::of(&scene).unwrap()
+    }
+
     /// Adhesive scene (issue 14): LAMMPS 2025 gets the exact GRC07 attraction by lepton/sphere,
     /// a capped deform/pressure servo and the relaxation loop; LAMMPS 2021 refuses it.
     #[test]
     fn adhesive_deck_overlays_lepton_and_relaxes() {
-        let scene = grainbench_engine::library::scene("xcode-cohesive-smoke")
-            .unwrap()
-            .unwrap();
-        let start = Start::of(&scene).unwrap();
+        let start = library_start("xcode-cohesive-smoke");
         let deck = super::super::deck(&start, Code::Lammps2025).unwrap();
         let input = &deck.files[0].1;
         for line in [
@@ -797,10 +800,7 @@ mod tests {
     /// fix deform servo re-based before every run, and the same relaxation.
     #[test]
     fn adhesive_class_deck_uses_tables_and_a_deform_servo() {
-        let scene = grainbench_engine::library::scene("xcode-cohesive-classes-smoke")
-            .unwrap()
-            .unwrap();
-        let start = Start::of(&scene).unwrap();
+        let start = library_start("xcode-cohesive-classes-smoke");
         let deck = super::super::deck(&start, Code::Lammps).unwrap();
         let input = &deck.files[0].1;
         let data = &deck.files[1].1;
