@@ -1,6 +1,7 @@
 //! Cross-code smoke tests (issues 4 and 14): the small 3D frictional scene `xcode-smoke` (N = 256,
 //! κ = 1e4, μ = 0.3, AR07 criteria) in our engine, LAMMPS (2021 and 2025), LIGGGHTS and YADE
-//! from the same start, and the 2D cohesive smoke scenes in ours and LAMMPS, through `grainbench compare`. Asserts that every run ends at
+//! from the same start, the 2D cohesive smoke scenes in ours and LAMMPS, and the 3D SJKR cohesive
+//! smoke scene in ours and LIGGGHTS, through `grainbench compare`. Asserts that every run ends at
 //! equilibrium, that the contact-stress pressure equals the target within the criterion
 //! (1e-4 P) in every code, and that Φ, z* and x0 agree with ours within k·√2·(seed-to-seed
 //! s.d. of our engine), the bands of golden/xcode-bands.toml (k = 3; spreads from seeds 1–9,
@@ -52,6 +53,22 @@ fn cohesive_classes_smoke_scene_agrees_with_lammps_2021() {
         0.01,
         1e-4,
         &["phi", "z_star", "z", "x0"],
+    );
+}
+
+/// SJKR cohesive smoke (issue 14): `xcode-sjkr-smoke`, 3D frictionless Hertz spheres with
+/// LIGGGHTS's own cohesion law (`cohesion sjkr`, attraction k·πa² in contact; ours is
+/// engine/src/contact/sjkr.rs, equal to LIGGGHTS's force to 1e-15 in
+/// comparisons/tests/liggghts_two_particle.rs) in our engine and LIGGGHTS. Same checks, bands of
+/// golden/xcode-bands.toml (Φ, z*, z and the repulsive/attractive split); ~40 s.
+#[test]
+fn sjkr_smoke_scene_agrees_with_liggghts() {
+    agree(
+        "xcode-sjkr-smoke",
+        "rust,liggghts",
+        1.0,
+        1e-4,
+        &["phi", "z_star", "z", "z_plus", "z_minus"],
     );
 }
 

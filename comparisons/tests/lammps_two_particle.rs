@@ -484,6 +484,7 @@ criteria = {{ preset = "grc07" }}
             w_j: 0.0,
             r_eff: (0.5 * d1) * (0.5 * d2) / (0.5 * (d1 + d2)),
             m_eff,
+            r_sum: 0.5 * (d1 + d2),
         };
         let mut hist = Default::default();
         ContactLaw::<D2>::interact(&law, &p, &mut hist, 0.0).normal
@@ -636,6 +637,7 @@ criteria = {{ preset = "ar07" }}
             w_j: w2,
             r_eff: r1 * r2 / (r1 + r2),
             m_eff: heavy * (d1 * d1 * d2 * d2) / (d1 * d1 + d2 * d2),
+            r_sum: r1 + r2,
         };
         let mut hist = Default::default();
         let mut ours = 0.0;

@@ -1,6 +1,8 @@
 //! Two spheres through a generated LIGGGHTS deck, read back by our reader, against our
 //! Hertz–Mindlin law (`engine/src/contact/hertz_mindlin.rs`): normal elastic force, normal
-//! damping at the clamped ζ, tangential stiffness K_T and tangential damping.
+//! damping at the clamped ζ, tangential stiffness K_T and tangential damping; and against our
+//! SJKR law (`engine/src/contact/sjkr.rs`): the cohesive normal force of unequal spheres and
+//! the overlap at which an attracted pair comes to rest.
 //!
 //! The final dump is written by a `run 0`, whose force evaluation uses the dumped positions
 //! and velocities and the stored tangential displacement (not incremented in a setup), so the
@@ -13,6 +15,9 @@ use common::rel;
 use grainbench_comparisons::xcode::decks::{self, liggghts, Stage, StageKind, Start, Tolerances};
 use grainbench_comparisons::xcode::import::{self, Meta};
 use grainbench_comparisons::xcode::Code;
+use grainbench_engine::contact::{ContactLaw, Pair};
+use grainbench_engine::geometry::{Dim, D3};
+use grainbench_engine::run::sjkr_law;
 use grainbench_engine::scene::{Mu, Scene};
 use std::path::Path;
 use std::process::Command;
@@ -21,6 +26,11 @@ const KAPPA: f64 = 1e4;
 const POISSON: f64 = 0.3;
 
 fn scene(zeta: f64) -> Scene {
+    scene_with(zeta, "mu = \"inf\"")
+}
+
+/// The two-sphere scene with law lines `law` (μ, cohesion) in place of μ = ∞.
+fn scene_with(zeta: f64, law: &str) -> Scene {
     let text = format!(
         r#"name = "two-particle-liggghts"
 description = "two spheres"
@@ -34,7 +44,7 @@ packing_fraction = 0.1
 [law]
 kind = "hertz-mindlin"
 kappa = {KAPPA}
-mu = "inf"
+{law}
 zeta = {zeta}
 poisson = {POISSON}
 [[protocol]]
@@ -224,6 +234,118 @@ fn tangential_stiffness_and_damping() {
         assert!(err <= 1e-3, "tangential force rel. error {err}");
         assert!(rel(c.normal, ex.normal) <= 1e-3);
     }
+}
+
+/// Cohesion energy density of the SJKR tests (units of P_ref, as in `xcode-sjkr-smoke`).
+const SJKR_K: f64 = 5000.0;
+
+type Vector3 = <D3 as Dim>::V;
+
+/// Frictionless spheres of diameters 1 and `d2` with SJKR cohesion, overlapping by `h0`.
+fn sjkr_start(d2: f64, h0: f64, v2: [f64; 3], steps: u64, dt: f64) -> Start {
+    let zeta = 0.5;
+    let mut s = start(zeta, h0, v2, steps, dt);
+    s.scene = scene_with(zeta, &format!("mu = 0.0\nsjkr = {SJKR_K}"));
+    s.stages[0].mu = Mu::Finite(0.0);
+    s.diameter[1] = d2;
+    s.mass[1] = d2.powi(3);
+    s.inertia[1] = 0.1 * d2.powi(5);
+    s.position[1][0] = 4.5 + 0.5 * (1.0 + d2) - h0;
+    s
+}
+
+/// Our SJKR pair of a dumped two-sphere state (j = grain 1 relative to grain 0).
+fn sjkr_pair(snap: &grainbench_engine::snapshot::Snapshot) -> Pair<D3> {
+    let p = &snap.particles;
+    let v3 = |x: &[f64]| Vector3::new(x[0], x[1], x[2]);
+    let b = v3(&p.position[1]) - v3(&p.position[0]);
+    let dist = b.norm();
+    let (ri, rj) = (p.radius[0], p.radius[1]);
+    let (mi, mj) = (p.mass[0], p.mass[1]);
+    Pair {
+        n: b / dist,
+        gap: dist - ri - rj,
+        v_contact: v3(&p.velocity[1]) - v3(&p.velocity[0]),
+        w_i: Vector3::zeros(),
+        w_j: Vector3::zeros(),
+        r_eff: ri * rj / (ri + rj),
+        m_eff: mi * mj / (mi + mj),
+        r_sum: ri + rj,
+    }
+}
+
+/// LIGGGHTS's `cohesion sjkr` against ours on unequal spheres: overlaps below, near and beyond
+/// the one where the attraction balances the Hertz repulsion, approaching and receding.
+#[test]
+fn sjkr_cohesive_normal_force() {
+    if !common::present(Code::Liggghts) {
+        return;
+    }
+    let (e, zeta_eff) = liggghts::restitution(0.5);
+    assert!(e > liggghts::MIN_RESTITUTION && (zeta_eff - 0.5).abs() < 1e-12);
+    for (h0, v) in [(2e-5, 0.0), (2e-4, -0.05), (6e-4, 0.0), (2e-3, 0.05)] {
+        let s = sjkr_start(0.7, h0, [v, 0.0, 0.0], 10, 1e-5);
+        let law = sjkr_law(s.law(), grainbench_engine::contact::slider::Frictionless);
+        let snap = run(&s);
+        assert_eq!(snap.contacts.len(), 1);
+        let c = &snap.contacts[0];
+        let p = sjkr_pair(&snap);
+        let ours = ContactLaw::<D3>::interact(&law, &p, &mut (), 0.0);
+        let pull =
+            SJKR_K * grainbench_engine::contact::sjkr::contact_area(-p.gap, p.r_eff, p.r_sum);
+        let err = (c.normal - ours.normal).abs() / pull;
+        eprintln!(
+            "sjkr h = {:.3e}: liggghts N = {:.9e}, ours {:.9e} (attraction {pull:.6e}), error {err:.2e} of the attraction",
+            -p.gap, c.normal, ours.normal
+        );
+        assert!(
+            err <= 1e-6,
+            "cohesive normal force off by {err} of the attraction"
+        );
+        // The attraction is there: without it N would be the Hertz force alone.
+        assert!(pull > 1e-3 * ours.normal_elastic.abs().max(1e-12));
+        let t: f64 = c.tangential.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!(t <= 1e-12 * pull, "frictionless: T = {t}");
+    }
+}
+
+/// Two spheres set down at a small overlap are pulled in and come to rest where our law's
+/// normal force vanishes (found by bisection), which LIGGGHTS must reproduce.
+#[test]
+fn sjkr_pair_rests_at_the_zero_force_overlap() {
+    if !common::present(Code::Liggghts) {
+        return;
+    }
+    let s = sjkr_start(0.7, 1e-5, [0.0; 3], 60_000, 1e-5);
+    let law = sjkr_law(s.law(), grainbench_engine::contact::slider::Frictionless);
+    let snap = run(&s);
+    let p = sjkr_pair(&snap);
+    let at = |h: f64| {
+        let mut q = p;
+        q.gap = -h;
+        q.v_contact = Vector3::zeros();
+        ContactLaw::<D3>::interact(&law, &q, &mut (), 0.0).normal
+    };
+    // Attractive at small overlaps, repulsive at large ones: one root in between.
+    let (mut lo, mut hi) = (1e-7, 1e-2);
+    assert!(at(lo) < 0.0 && at(hi) > 0.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if at(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let h_rest = 0.5 * (lo + hi);
+    let h = -p.gap;
+    let speed = p.v_contact.norm();
+    eprintln!("sjkr rest: liggghts h = {h:.9e}, ours {h_rest:.9e}, |v| = {speed:.2e}");
+    assert!(speed < 1e-6, "still moving: {speed}");
+    assert!(
+        (h - h_rest).abs() <= 1e-6 * h_rest,
+        "rest overlap {h} vs {h_rest}"
+    );
 }
 
 /// Import and analysis of a finished LIGGGHTS run (the `xcode-smoke` deck, say):

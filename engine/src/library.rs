@@ -12,6 +12,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "xcode-smoke",
     "xcode-cohesive-smoke",
     "xcode-cohesive-classes-smoke",
+    "xcode-sjkr-smoke",
     "ar07-A-n1372",
     "ar07-D-10kPa-n1372",
     "ar07-A",

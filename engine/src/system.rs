@@ -354,6 +354,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                 w_j,
                 r_eff: ri * rj * (mi + mj) * inv,
                 m_eff: mi * mj * (ri + rj) * inv,
+                r_sum: ri + rj,
             },
             r,
             ri.min(rj),

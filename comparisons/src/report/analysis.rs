@@ -54,7 +54,7 @@ pub fn to_markdown(a: &Analysis) -> String {
         "force threshold",
         sig6(a.force_threshold),
         if a.cohesive {
-            "absolute, in F0 (GRC07 T.VI)"
+            "absolute, in the force unit (F0 for GRC07, T.VI)"
         } else {
             "tolerance × ⟨|N|⟩"
         },
@@ -160,7 +160,11 @@ pub fn to_markdown(a: &Analysis) -> String {
             format!("{} bins", h.x.len()),
             &format!(
                 "f = N/{}, width {}, mode at f = {} (series in JSON: forces.pdf)",
-                if a.cohesive { "F0" } else { "⟨N⟩" },
+                if a.cohesive {
+                    "(force unit)"
+                } else {
+                    "⟨N⟩"
+                },
                 sig6(h.bin_width),
                 sig6(mode(&h.x, &h.y))
             ),

@@ -2,6 +2,7 @@
 
 use crate::contact::hertz_mindlin::HertzMindlin;
 use crate::contact::linear::{Adhesion, Linear};
+use crate::contact::sjkr::Sjkr;
 use crate::contact::slider::RollingSpring;
 use crate::scene::Law;
 
@@ -18,6 +19,18 @@ pub fn hertz_mindlin_law<F>(law: &Law, friction: F) -> HertzMindlin<F> {
         panic!("hertz_mindlin_law needs a Hertz–Mindlin law")
     };
     HertzMindlin::new(kappa.powf(1.5), *poisson, *zeta, friction)
+}
+
+/// The Hertz–Mindlin law of a scene with its SJKR cohesion (LIGGGHTS `cohesion sjkr`), k in
+/// units of P_ref. Panics if `law` is not Hertz–Mindlin with `sjkr`.
+pub fn sjkr_law<F>(law: &Law, friction: F) -> Sjkr<F> {
+    let Law::HertzMindlin { sjkr: Some(k), .. } = law else {
+        panic!("sjkr_law needs a Hertz–Mindlin law with sjkr")
+    };
+    Sjkr {
+        hertz: hertz_mindlin_law(law, friction),
+        k: *k,
+    }
 }
 
 /// The linear law of a scene in reduced units (K_N = κ, K_T = κ·kt_over_kn) with the given

@@ -5,12 +5,15 @@
 //! - [`hertz_mindlin::HertzMindlin`]: AR07 (1)–(5), App. A (Walton rescaling), App. B (transport).
 //! - [`linear::Linear`]: GRC07 (4)–(10): spring–dashpot–Coulomb with optional adhesion and
 //!   rolling resistance; with no adhesion it is the classic cohesionless linear law.
-//! - [`slider`]: the elastic-plastic sliders (Coulomb and rolling) shared by both.
+//! - [`sjkr::Sjkr`]: Hertz–Mindlin with LIGGGHTS 3.8's `cohesion sjkr` (attraction ∝ the area
+//!   of the contact circle), the cohesive law a LIGGGHTS run reproduces exactly.
+//! - [`slider`]: the elastic-plastic sliders (Coulomb and rolling) shared by them.
 //! - [`from_scene`]: the law of a scene's `[law]` table, in reduced units.
 
 pub mod from_scene;
 pub mod hertz_mindlin;
 pub mod linear;
+pub mod sjkr;
 pub mod slider;
 
 use crate::geometry::Dim;
@@ -30,6 +33,8 @@ pub struct Pair<D: Dim> {
     /// Reduced radius R_i R_j/(R_i+R_j) and reduced mass m_i m_j/(m_i+m_j).
     pub r_eff: f64,
     pub m_eff: f64,
+    /// R_i + R_j (the centre distance is `r_sum + gap`).
+    pub r_sum: f64,
 }
 
 /// What a law returns for one pair.

@@ -41,8 +41,10 @@ pub struct StageNumerics {
     pub window: f64,
     /// The stage's final relaxation, if any (engine/src/run/relax.rs).
     pub relax: Option<Relax>,
-    /// The law has cohesion (force unit F0).
+    /// The law has GRC07 adhesion (force unit F0, time unit T0).
     pub cohesive: bool,
+    /// The law attracts (GRC07 adhesion or SJKR): snapshots count contacts by the cohesive rule.
+    pub attractive: bool,
     /// The law's friction coefficient and rolling threshold μ_r (∞ without rolling
     /// resistance), for the snapshot and the contacts at a threshold.
     pub mu: Mu,
@@ -73,6 +75,7 @@ impl StageNumerics {
             window: 0.0,
             relax: None,
             cohesive: scene.law.cohesion().is_some(),
+            attractive: scene.law.attractive(),
             mu: scene.law.mu(),
             mu_r: match &scene.law {
                 Law::Linear {

@@ -65,7 +65,7 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
             format!("P_ref a^{}", D::D - 1)
         },
         pressure_target,
-        cohesive,
+        cohesive: num.attractive,
         mu,
         cell: snapshot::Cell {
             lengths: sys.cell.l.to_vec(),

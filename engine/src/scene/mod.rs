@@ -152,6 +152,11 @@ pub enum Law {
         /// Poisson ratio ν, giving K_T/K_N = (2-2ν)/(2-ν) (AR07 (3)).
         #[serde(default = "default_poisson")]
         poisson: f64,
+        /// LIGGGHTS 3.8's `cohesion sjkr`: an attraction k·πa² in contact (πa²: area of the
+        /// circle where the two spheres intersect), k in units of P_ref
+        /// (`engine/src/contact/sjkr.rs`). Absent: no cohesion.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        sjkr: Option<f64>,
     },
     /// Linear spring–dashpot–Coulomb disks or spheres with optional short-range adhesion and
     /// rolling resistance (GRC07 §II.B).
@@ -720,6 +725,14 @@ impl Law {
         match self {
             Law::Linear { cohesion, .. } => *cohesion,
             Law::HertzMindlin { .. } => None,
+        }
+    }
+    /// Does the law attract (GRC07 adhesion or the SJKR area cohesion)? Such scenes report
+    /// tensile forces, z0 and clusters.
+    pub fn attractive(&self) -> bool {
+        match self {
+            Law::Linear { cohesion, .. } => cohesion.is_some(),
+            Law::HertzMindlin { sjkr, .. } => sjkr.is_some(),
         }
     }
     pub fn has_moments(&self) -> bool {

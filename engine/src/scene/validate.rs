@@ -152,6 +152,7 @@ impl Scene {
                 mu,
                 zeta,
                 poisson,
+                sjkr,
             } => {
                 if self.dimension != 3 {
                     return Err(err(
@@ -167,6 +168,14 @@ impl Scene {
                         "law.poisson",
                         format!("must lie in (-1, 0.5), got {poisson}"),
                     ));
+                }
+                if let Some(k) = sjkr {
+                    if !(k.is_finite() && *k >= 0.0) {
+                        return Err(err(
+                            "law.sjkr",
+                            format!("must be a finite cohesion energy density ≥ 0 (units of P_ref), got {k}"),
+                        ));
+                    }
                 }
             }
             Law::Linear {
@@ -509,6 +518,11 @@ mod tests {
             .replace("kind = \"linear\"", "kind = \"hertz-mindlin\"")
             .replace("kt_over_kn = 1\n", ""));
         assert!(!e.message.is_empty());
+        // SJKR cohesion: a finite energy density ≥ 0.
+        let sjkr = crate::library::scene_text("xcode-sjkr-smoke").unwrap();
+        let e = err(&sjkr.replace("sjkr = 5000.0", "sjkr = -1.0"));
+        assert_eq!(e.field, "law.sjkr", "{e}");
+        assert!(e.message.contains("P_ref"), "{e}");
     }
 
     #[test]

@@ -62,6 +62,9 @@ pub enum Feature {
     /// Adhesion between grains of more than [`MAX_CLASSES`](super::lammps_table::MAX_CLASSES) distinct diameters (continuous
     /// sizes): the attraction depends on each pair's R_i + R_j.
     AdhesionContinuousSizes,
+    /// LIGGGHTS 3.8's `cohesion sjkr`: attraction k·πa² in contact, πa² the area of the
+    /// spheres' intersection circle (`engine/src/contact/sjkr.rs`).
+    SjkrCohesion,
     /// Rolling spring K_r with cap μ_r N_e (GRC07 (9)–(10)).
     Rolling,
     /// Rolling resistance between grains of more than [`MAX_CLASSES`](super::lammps_table::MAX_CLASSES)
@@ -94,7 +97,7 @@ pub enum Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 24] = [
+    pub const ALL: [Feature; 25] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -105,6 +108,7 @@ impl Feature {
         Feature::NoSlip,
         Feature::Adhesion,
         Feature::AdhesionContinuousSizes,
+        Feature::SjkrCohesion,
         Feature::Rolling,
         Feature::RollingContinuousSizes,
         Feature::TangentialDamping,
@@ -133,6 +137,7 @@ impl Feature {
             Feature::NoSlip => "no-slip",
             Feature::Adhesion => "adhesion",
             Feature::AdhesionContinuousSizes => "adhesion-continuous-sizes",
+            Feature::SjkrCohesion => "sjkr-cohesion",
             Feature::Rolling => "rolling-resistance",
             Feature::RollingContinuousSizes => "rolling-continuous-sizes",
             Feature::TangentialDamping => "tangential-damping",
@@ -162,6 +167,7 @@ impl Feature {
             Feature::NoSlip => "μ = ∞: contacts never slide",
             Feature::Adhesion => "pull -F0 in contact, linear attraction over D0 (GRC07 (4)-(5))",
             Feature::AdhesionContinuousSizes => "adhesion between continuously distributed diameters (more than 16 distinct; `particles.classes` gives classes)",
+            Feature::SjkrCohesion => "LIGGGHTS `cohesion sjkr`: attraction k·πa² in contact (a: radius of the contact circle)",
             Feature::Rolling => "rolling spring K_r, cap μ_r N_e (GRC07 (9)-(10))",
             Feature::RollingContinuousSizes => "rolling resistance between continuously distributed diameters (more than 16 distinct; `particles.classes` gives classes)",
             Feature::TangentialDamping => "tangential/rolling viscosity (grainbench option)",
@@ -187,9 +193,12 @@ pub fn features(start: &Start) -> Vec<Feature> {
     let mut f = Vec::new();
     let any_mu = |pred: &dyn Fn(Mu) -> bool| start.stages.iter().any(|s| pred(s.mu));
     match start.law() {
-        Law::HertzMindlin { .. } => {
+        Law::HertzMindlin { sjkr, .. } => {
             f.push(Feature::HertzNormal);
             f.push(Feature::HertzDamping);
+            if sjkr.is_some() {
+                f.push(Feature::SjkrCohesion);
+            }
             if any_mu(&|m| m.value() > 0.0) {
                 f.push(Feature::MindlinTangential);
                 f.push(Feature::MindlinUnloading);
@@ -298,6 +307,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
             F::Adhesion => Exact,
             F::AdhesionContinuousSizes if code == Code::Lammps2025 => Exact,
+            F::SjkrCohesion => Unsupported("no area-proportional cohesion in `granular` (`dmt` and `jkr` are other laws); not generated"),
             F::AdhesionContinuousSizes => Unsupported("pair_style table sees only r and the atom types, so the attraction is one table per pair of diameter classes: give the scene `particles.classes` (at most 16)"),
             F::Rolling => Approximate("`rolling sds` per pair of diameter classes, k_roll = K_r/R*², μ_roll = μ_r/R*: the moment cap uses the total normal force (damping included)"),
             F::RollingContinuousSizes => Unsupported("`rolling sds` takes K_r/R*² and μ_r/R* per pair of atom types: give the scene `particles.classes` (at most 16)"),
@@ -319,6 +329,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::NoSlip => Approximate("μ = ∞ given as μ = 1e300"),
             F::Adhesion => Unsupported("cohesion sjkr/sjkr2 give a force ∝ contact area, zero at first touch, with no range"),
             F::AdhesionContinuousSizes => Unsupported(NO_GRC07_ADHESION),
+            F::SjkrCohesion => Exact,
             F::Rolling => Unsupported("rolling_friction epsd3 not generated"),
             F::RollingContinuousSizes => Unsupported(NO_ROLLING),
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),
@@ -340,6 +351,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::LinearSprings | F::LinearDamping => Unsupported("Law2_ScGeom_FrictPhys_CundallStrack has no dashpot and ViscElPhys is wrong in a deforming periodic cell"),
             F::Adhesion => Unsupported("CohFrictMat gives a spring to −F0 then constant −F0 (not generated)"),
             F::AdhesionContinuousSizes => Unsupported(NO_GRC07_ADHESION),
+            F::SjkrCohesion => Unsupported("no area-proportional cohesion law (CohFrictMat bonds are another law)"),
             F::Rolling => Unsupported("moment law not generated"),
             F::RollingContinuousSizes => Unsupported(NO_ROLLING),
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),

@@ -5,9 +5,13 @@
 //!   normal force (4/3)Y*√(R*h)·h is our (2/3)Ẽ√(R*h)·h), `poissonsRatio` ν (its
 //!   K_T = 8G*√(R*h) is our (2−2ν)/(2−ν)·K_N), `coefficientRestitution` from ζ (see
 //!   [`restitution`]) and `coefficientFriction` μ (μ = ∞ as 1e300). `units si` with reduced
-//!   numbers: `soft_particles yes` lifts the E ≥ 5e6 check. Tangential damping (at the same
-//!   fraction of critical as the normal one, on K_T) is kept on, a deviation: with it off, the
-//!   smoke packing kept 1.8e-8 kinetic energy per grain in a grain rocking on one contact.
+//!   numbers: `soft_particles yes` lifts the E ≥ 5e6 check. With friction, tangential damping
+//!   (at the same fraction of critical as the normal one, on K_T) is kept on, a deviation: with
+//!   it off, the smoke packing kept 1.8e-8 kinetic energy per grain in a grain rocking on one
+//!   contact. Frictionless scenes turn it off (no tangential force at all, as ours).
+//! * Cohesion: `cohesion sjkr` with `cohesionEnergyDensity` k when the scene's Hertz–Mindlin law
+//!   has `sjkr = k` (the same law as engine/src/contact/sjkr.rs; LIGGGHTS adds it to the
+//!   normal force its tangential model caps with, as ours does).
 //! * Stress control: LIGGGHTS has no barostat fix. A servo: `fix ave/time` of the virial
 //!   pressure compute feeds `fix deform … variable`, with per-axis strain rates
 //!   ε̇_α = cap·clamp((σ_αα − P_target)/(w·P_target), −1, 1) ([`SERVO_BAND`] = w), so the cell
@@ -51,6 +55,12 @@ pub fn restitution(zeta: f64) -> (f64, f64) {
     (e, zeta_eff)
 }
 
+/// Does LIGGGHTS's restitution give ζ exactly (ζ ≤ 0.63)? Then the matrix's `hertz-damping`
+/// deviation (the cap) does not apply to the deck.
+pub fn damping_exact(zeta: f64) -> bool {
+    (restitution(zeta).1 - zeta).abs() <= 1e-9 * zeta.max(1.0)
+}
+
 /// Young's modulus and Poisson ratio for the Hertz law at stage κ: Ẽ = κ^1.5 (AR07 (21) with
 /// P_ref = 1), E = Ẽ(1−ν²).
 fn young(kappa: f64, poisson: f64) -> f64 {
@@ -59,21 +69,27 @@ fn young(kappa: f64, poisson: f64) -> f64 {
 
 /// The LIGGGHTS deck of `start`.
 pub fn deck(start: &Start, deviations: &[String]) -> Deck {
-    let (poisson, zeta) = match start.law() {
-        Law::HertzMindlin { poisson, zeta, .. } => (*poisson, *zeta),
+    let (poisson, zeta, sjkr) = match start.law() {
+        Law::HertzMindlin {
+            poisson,
+            zeta,
+            sjkr,
+            ..
+        } => (*poisson, *zeta, *sjkr),
         // The capability matrix refuses the linear law for LIGGGHTS.
-        Law::Linear { zeta, .. } => (0.0, *zeta),
+        Law::Linear { zeta, .. } => (0.0, *zeta, None),
     };
     let (e, zeta_eff) = restitution(zeta);
     let mut devs: Vec<String> = deviations.to_vec();
-    if (zeta_eff - zeta).abs() > 1e-9 * zeta.max(1.0) {
+    if !damping_exact(zeta) {
         devs.push(format!(
             "normal damping ζ = {zeta} given as restitution e = {} (LIGGGHTS needs 0.05 < e ≤ 1): effective ζ = {:.6}",
             num(e),
             zeta_eff
         ));
     }
-    if zeta_eff > 0.0 {
+    let friction = start.stages.iter().any(|st| st.mu.value() > 0.0);
+    if zeta_eff > 0.0 && friction {
         devs.push(format!(
             "tangential viscous damping γ_t = 2ζ√(m* K_T) with ζ = {zeta_eff:.6} (LIGGGHTS `tangential_damping on`): without it, grains held by one contact rock without damping and the kinetic-energy criterion is never met"
         ));
@@ -101,12 +117,25 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
          fix m2 all property/global poissonsRatio peratomtype {}\n\
          fix m3 all property/global coefficientRestitution peratomtypepair 1 {}\n\
          fix m4 all property/global coefficientFriction peratomtypepair 1 {}\n\
-         pair_style gran model hertz tangential history tangential_damping on\n\
+         {}pair_style gran model hertz tangential history{} tangential_damping {}\n\
          pair_coeff * *\nfix integr all nve/sphere\n",
         num(young(first.kappa, poisson)),
         num(poisson),
         num(e),
-        super::mu_text(first.mu)
+        super::mu_text(first.mu),
+        // SJKR (engine/src/contact/sjkr.rs): F = k·πa² in contact, k in units of P_ref.
+        match sjkr {
+            Some(k) => format!(
+                "fix m5 all property/global cohesionEnergyDensity peratomtypepair 1 {}\n",
+                num(k)
+            ),
+            None => String::new(),
+        },
+        if sjkr.is_some() { " cohesion sjkr" } else { "" },
+        // Frictionless: off. With μ = 0 the history model caps T to 0 every step, but a run's
+        // setup force pass does not advance the (zero) displacement, so its cap test passes and
+        // the dashpot alone acts on the first step of every chunk.
+        if friction { "on" } else { "off" },
     );
     // Measures (the pair/gran/local compute must exist before the first run).
     let _ = writeln!(
@@ -338,5 +367,48 @@ mod tests {
         assert_eq!(e, MIN_RESTITUTION);
         assert!((z - 0.63).abs() < 0.005, "{z}");
         assert_eq!(restitution(0.0), (1.0, 0.0));
+    }
+
+    fn library_deck(name: &str) -> (Deck, String) {
+        let scene = grainbench_engine::library::scene(name).unwrap().unwrap();
+        let start = Start::of(&scene).unwrap();
+        let deck = super::super::deck(&start, Code::Liggghts).unwrap();
+        let input = deck.files[0].1.clone();
+        (deck, input)
+    }
+
+    /// The SJKR scene: `cohesion sjkr` with its energy density, no tangential dashpot
+    /// (frictionless), and neither the damping cap nor tangential damping among the deviations
+    /// (ζ = 0.5 is exact).
+    #[test]
+    fn sjkr_deck_adds_the_area_cohesion() {
+        let (deck, input) = library_deck("xcode-sjkr-smoke");
+        for line in [
+            "fix m5 all property/global cohesionEnergyDensity peratomtypepair 1 5e3\n",
+            "pair_style gran model hertz tangential history cohesion sjkr tangential_damping off\n",
+        ] {
+            assert!(input.contains(line), "missing {line:?}");
+        }
+        // The deviations listed in the deck's header.
+        let listed = |input: &str| -> Vec<String> {
+            input
+                .lines()
+                .filter_map(|l| l.strip_prefix("#   - ").map(str::to_string))
+                .collect()
+        };
+        let devs = listed(&input);
+        assert!(!devs.is_empty() && devs.len() == deck.deviations.len());
+        assert!(
+            devs.iter()
+                .all(|d| !d.contains("damping") && !d.contains("sjkr")),
+            "{devs:?}"
+        );
+        // Frictional Hertz scenes keep the tangential dashpot and have no cohesion.
+        let (_, input) = library_deck("xcode-smoke");
+        assert!(input.contains("tangential history tangential_damping on\n"));
+        assert!(!input.contains("cohesionEnergyDensity"));
+        assert!(listed(&input)
+            .iter()
+            .any(|d| d.contains("tangential viscous damping")));
     }
 }

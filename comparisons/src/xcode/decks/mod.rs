@@ -318,6 +318,14 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
     let deviations: Vec<String> = feats
         .iter()
         .filter_map(|f| match capability::support(code, *f) {
+            // The restitution cap does not bite at this ζ: LIGGGHTS's damping is ours.
+            Support::Approximate(_)
+                if code == Code::Liggghts
+                    && *f == Feature::HertzDamping
+                    && matches!(start.law(), Law::HertzMindlin { zeta, .. } if liggghts::damping_exact(*zeta)) =>
+            {
+                None
+            }
             Support::Approximate(why) if adhesive_lammps => {
                 Some(lammps::adhesive_deviation(*f, why, code))
             }
@@ -358,7 +366,7 @@ impl Start {
             code: code.name().into(),
             dimension: self.dimension,
             pressure_target,
-            cohesive: self.cohesive(),
+            cohesive: self.scene.law.attractive(),
             mu: match last.map(|s| s.mu) {
                 Some(Mu::Infinite) => None,
                 Some(Mu::Finite(x)) => Some(x),
