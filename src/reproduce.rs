@@ -210,7 +210,7 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
 }
 
 /// P(f) and g(r) of every analysis (one curve per label: seeds, codes), overlaid; the DTS fit
-/// for frictionless sphere packings (AR07 Fig. 4). Returns the files written.
+/// for cohesionless frictionless sphere packings (AR07 Fig. 4). Returns the files written.
 pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) -> Vec<PathBuf> {
     let mut written = Vec::new();
     let pf: Vec<Vec<(f64, f64)>> = analyses
@@ -221,9 +221,11 @@ pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) 
         .iter()
         .map(|a| points(a.structure.pair_correlation.as_ref().map(|g| (&g.x, &g.y))))
         .collect();
+    // The DTS fit describes cohesionless frictionless spheres only; cohesive P(f) is of N itself.
+    let cohesive = analyses.first().is_some_and(|a| a.cohesive);
     let frictionless_spheres = analyses
         .first()
-        .is_some_and(|a| a.dimension == 3 && a.mu == Some(0.0));
+        .is_some_and(|a| a.dimension == 3 && a.mu == Some(0.0) && !a.cohesive);
     fn series<'a>(pts: &'a [Vec<(f64, f64)>], labels: &'a [String]) -> Vec<plots::Series<'a>> {
         pts.iter()
             .zip(labels)
@@ -231,7 +233,12 @@ pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) 
             .map(|(p, l)| plots::Series::new(l, p))
             .collect()
     }
-    match plots::force_distribution(&out.join("pf"), &series(&pf, labels), frictionless_spheres) {
+    match plots::force_distribution(
+        &out.join("pf"),
+        &series(&pf, labels),
+        frictionless_spheres,
+        cohesive,
+    ) {
         Ok(f) => written.extend([f.svg, f.png]),
         Err(e) => eprintln!("warning: no P(f) plot: {e}"),
     }

@@ -19,6 +19,7 @@
 //!     std::path::Path::new("out/pf-state-A"),
 //!     &[Series::new("grainbench, seed 1", &hist)],
 //!     true,
+//!     false,
 //! )
 //! .unwrap();
 //! println!("{} {}", files.svg.display(), files.png.display());
@@ -215,7 +216,8 @@ pub enum PlotError {
     },
 }
 
-/// P(f) of normalized normal forces f = N/⟨N⟩ on a log-linear plot (AR07 Figs. 4 and 15).
+/// P(f) of normalized normal forces f = N/⟨N⟩ on a log-linear plot (AR07 Figs. 4 and 15), or,
+/// with `cohesive`, of N in the force unit, tensile forces negative (GRC07 Fig. 9).
 ///
 /// `histograms`: one series per code, seed or state, as (bin centre, probability density); empty
 /// bins (P = 0) are left out on the log scale. With `with_dts_fit`, the DTS fit ([`dts_fit`]) is
@@ -224,6 +226,7 @@ pub fn force_distribution(
     out: &Path,
     histograms: &[Series],
     with_dts_fit: bool,
+    cohesive: bool,
 ) -> Result<PlotFiles, PlotError> {
     let f_max = histograms
         .iter()
@@ -259,7 +262,11 @@ pub fn force_distribution(
     }
     let spec = Spec {
         title: "Normal force distribution P(f)",
-        x_label: "f = N / <N>",
+        x_label: if cohesive {
+            "f = N in the force unit (tensile < 0)"
+        } else {
+            "f = N / <N>"
+        },
         y_label: "P(f)",
         curves,
         x_axis: Axis::Linear,
@@ -726,6 +733,7 @@ mod tests {
                 Series::new("LIGGGHTS seed 1", &b),
             ],
             true,
+            false,
         )
         .unwrap();
         assert_eq!(files.svg, dir.path().join("pf-A.svg"));
@@ -746,6 +754,19 @@ mod tests {
             ["pf-A.png", "pf-A.svg"],
             "no temporary left"
         );
+        assert!(svg.contains("f = N / &lt;N&gt;") || svg.contains("f = N / <N>"));
+        // Cohesive: forces in the force unit, tensile ones negative, no DTS fit.
+        let t = vec![(-0.4, 0.1), (0.2, 0.8), (1.0, 0.3)];
+        let files = force_distribution(
+            &dir.path().join("pf-c"),
+            &[Series::new("c", &t)],
+            false,
+            true,
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(&files.svg).unwrap();
+        assert!(svg.contains("tensile &lt; 0") || svg.contains("tensile < 0"));
+        assert!(!svg.contains("DTS fit"));
     }
 
     #[test]
@@ -821,8 +842,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let missing = dir.path().join("no-such-dir");
         let h = histogram(1.0);
-        let err =
-            force_distribution(&missing.join("pf"), &[Series::new("s", &h)], true).unwrap_err();
+        let err = force_distribution(&missing.join("pf"), &[Series::new("s", &h)], true, false)
+            .unwrap_err();
         assert!(
             matches!(&err, PlotError::MissingDirectory(d) if d == &missing),
             "{err:?}"
@@ -848,8 +869,13 @@ mod tests {
         assert!(matches!(err, PlotError::NoData(_)), "{err:?}");
         // Only zeros on a log axis: nothing drawable.
         let zeros = [(1.0, 0.0), (2.0, 0.0)];
-        let err = force_distribution(&dir.path().join("pf"), &[Series::new("z", &zeros)], false)
-            .unwrap_err();
+        let err = force_distribution(
+            &dir.path().join("pf"),
+            &[Series::new("z", &zeros)],
+            false,
+            false,
+        )
+        .unwrap_err();
         assert!(matches!(err, PlotError::NoData(_)), "{err:?}");
         let ok = [(1.0, 1.0), (2.0, 2.0)];
         let series = [Series::new("ok", &ok)];
