@@ -6,7 +6,11 @@
 //!   T on the second body opposes its motion;
 //! * C: a collision of unit-mass grains: restitution vs our law integrated with YADE's
 //!   leapfrog at the same time step (YADE clips the total normal force at 0: see below);
-//! * D: sliding: |T| = μ N.
+//! * D: sliding: |T| = μ N;
+//!
+//! and a second run against our DMT law (`engine/src/contact/dmt.rs`, YADE's
+//! `includeAdhesion`): the pull 4πR*γ of unequal spheres at rest, the dashpot capped at the
+//! pull on a fast-receding pair, and the dashpot on YADE's scaled normal velocity.
 //!
 //! Skipped (with a notice) when `yade` is not on PATH, unless `CI` is set.
 
@@ -32,6 +36,11 @@ const HEAVY: f64 = 1e12;
 const SLIDER: f64 = 1e6;
 
 fn scene() -> Scene {
+    scene_with(&format!("mu = {MU}"))
+}
+
+/// The four-pair scene with the law lines `law` (μ, adhesion).
+fn scene_with(law: &str) -> Scene {
     let toml = format!(
         r#"
 name = "yade-two-particle"
@@ -45,7 +54,7 @@ packing_fraction = 0.01
 [law]
 kind = "hertz-mindlin"
 kappa = {KAPPA}
-mu = {MU}
+{law}
 zeta = {ZETA}
 poisson = {POISSON}
 [[protocol]]
@@ -152,20 +161,9 @@ fn restitution(v0: f64, gap0: f64, dt: f64, clip: bool) -> f64 {
     panic!("collision did not end");
 }
 
-#[test]
-fn yade_two_particle() {
-    if !common::present(Code::Yade) {
-        if std::env::var_os("CI").is_some() {
-            panic!(
-                "yade not found on PATH (CI is set): {}",
-                Code::Yade.install_hint()
-            );
-        }
-        eprintln!("yade_two_particle: skipped, `yade` not on PATH");
-        return;
-    }
-    let s = setup();
-    let deck = decks::deck(&s.start, Code::Yade).expect("deck");
+/// Runs the YADE deck of `start`; returns its export and log.
+fn run(start: &Start) -> (import::Raw, String) {
+    let deck = decks::deck(start, Code::Yade).expect("deck");
     // YADE_TWO_PARTICLE_DIR: run there and keep the files (for inspection).
     let tmp = tempfile::tempdir().unwrap();
     let keep = std::env::var_os("YADE_TWO_PARTICLE_DIR").map(std::path::PathBuf::from);
@@ -187,6 +185,16 @@ fn yade_two_particle() {
     assert!(out.status.success(), "yade failed:\n{log}");
     let meta = Meta::read(&dir_path).unwrap();
     let raw = import::yade::read_dir(&dir_path, &meta).expect("export reads");
+    (raw, log)
+}
+
+#[test]
+fn yade_two_particle() {
+    if !common::present(Code::Yade) {
+        return;
+    }
+    let s = setup();
+    let (raw, log) = run(&s.start);
     assert_eq!(raw.step, STEPS, "{log}");
     assert_eq!(raw.status, "time-limit");
     let contact = |i: usize, j: usize| {
@@ -267,6 +275,103 @@ fn yade_two_particle() {
         MU * d.normal_elastic.unwrap()
     );
     assert!(err_d <= 1e-3, "Coulomb");
+}
+
+/// Surface energy of the DMT test (units of P_ref·a): pull 4πR*γ = 0.63 for unit spheres.
+const GAMMA: f64 = 0.2;
+
+/// YADE's DMT adhesion against ours, frictionless, three pairs far apart:
+/// * A: diameters 1 and 0.7 at rest (huge masses), overlap 1e-3: N = Hertz − 4πR*γ;
+/// * E: unit spheres (huge masses) receding at 1e-3 from an overlap of 2e-4: the dashpot would
+///   pull far harder than F_a, so the total is N_e − 2F_a;
+/// * F: unit spheres of mass 1e9 approaching at 1e-5 at an overlap of 1e-2: the dashpot on the
+///   plain normal velocity (YADE scales only the tangential slip by (R_i+R_j)/r, see B above:
+///   a scaled dashpot would be 1 % larger here, 0.3 F_a).
+///
+/// YADE's exported forces are those of the step before the exported positions (the integrator
+/// runs after the force loop), so ours is evaluated one step back, at x − v dt.
+#[test]
+fn yade_dmt_adhesion() {
+    use grainbench_engine::contact::{slider::Frictionless, ContactLaw, Pair};
+    use grainbench_engine::geometry::{Dim, D3};
+    type V = <D3 as Dim>::V;
+    if !common::present(Code::Yade) {
+        return;
+    }
+    let mut s = setup().start;
+    s.scene = scene_with(&format!("mu = 0.0\ndmt = {GAMMA}"));
+    s.stages[0].mu = Mu::Finite(0.0);
+    let (steps, dt) = (5u64, DT);
+    s.stages[0].max_steps = steps;
+    s.stages[0].check_every = steps;
+    s.stages[0].max_time = steps as f64 * dt;
+    let d2 = 0.7;
+    // (position, velocity, mass, diameter).
+    let grains: Vec<([f64; 3], [f64; 3], f64, f64)> = vec![
+        ([2.0, 2.0, 2.0], [0.0; 3], HEAVY, 1.0),
+        (
+            [2.0 + 0.5 * (1.0 + d2) - 1e-3, 2.0, 2.0],
+            [0.0; 3],
+            HEAVY,
+            d2,
+        ),
+        ([2.0, 8.0, 2.0], [0.0; 3], HEAVY, 1.0),
+        ([3.0 - 2e-4, 8.0, 2.0], [1e-3, 0.0, 0.0], HEAVY, 1.0),
+        ([2.0, 14.0, 10.0], [0.0; 3], 1e9, 1.0),
+        ([3.0 - 1e-2, 14.0, 10.0], [-1e-5, 0.0, 0.0], 1e9, 1.0),
+    ];
+    s.position = grains.iter().map(|g| g.0.to_vec()).collect();
+    s.velocity = grains.iter().map(|g| g.1.to_vec()).collect();
+    s.mass = grains.iter().map(|g| g.2).collect();
+    s.diameter = grains.iter().map(|g| g.3).collect();
+    s.inertia = grains.iter().map(|g| 0.1 * g.2 * g.3 * g.3).collect();
+    let law = grainbench_engine::run::dmt_law(s.law(), Frictionless);
+    let (raw, log) = run(&s);
+    assert_eq!(raw.step, steps, "{log}");
+    let ours = |i: usize, j: usize| {
+        let v = |x: &[f64]| V::new(x[0], x[1], x[2]);
+        let back = |k: usize| v(&raw.position[k]) - v(&raw.velocity[k]) * dt;
+        let b = back(j) - back(i);
+        let dist = b.norm();
+        let (ri, rj) = (raw.radius[i], raw.radius[j]);
+        let (mi, mj) = (raw.mass[i], raw.mass[j]);
+        let p = Pair::<D3> {
+            n: b / dist,
+            gap: dist - ri - rj,
+            v_contact: v(&raw.velocity[j]) - v(&raw.velocity[i]),
+            w_i: V::zeros(),
+            w_j: V::zeros(),
+            r_eff: ri * rj / (ri + rj),
+            m_eff: mi * mj / (mi + mj),
+            r_sum: ri + rj,
+        };
+        (ContactLaw::<D3>::interact(&law, &p, &mut (), 0.0), p)
+    };
+    let yade = |i: usize, j: usize| {
+        raw.contacts
+            .iter()
+            .find(|c| (c.i, c.j) == (i, j) || (c.i, c.j) == (j, i))
+            .unwrap_or_else(|| panic!("no contact {i}-{j} in {:?}", raw.contacts))
+            .normal
+    };
+    let pi = std::f64::consts::PI;
+    for (name, i, j, tol) in [("A", 0, 1, 1e-6), ("E", 2, 3, 1e-6), ("F", 4, 5, 1e-6)] {
+        let (f, p) = ours(i, j);
+        let y = yade(i, j);
+        let pull = 4.0 * pi * p.r_eff * GAMMA;
+        // Relative to the larger of |N| and the pull (F's velocity is a step older in YADE:
+        // its force has moved by a·dt·α ≈ 1e-4 of 363 since).
+        let err = (y - f.normal).abs() / y.abs().max(pull);
+        eprintln!(
+            "DMT {name}: h = {:.6e}, N yade = {y:.9e}, ours = {:.9e} (N_e {:.6e}, pull {pull:.6e}), relative error {err:.2e}",
+            -p.gap, f.normal, f.normal_elastic
+        );
+        assert!(err <= tol, "DMT {name}: {err}");
+    }
+    // E is the capped case: N = N_e − 2F_a.
+    let (f, p) = ours(2, 3);
+    let pull = 4.0 * pi * p.r_eff * GAMMA;
+    assert!((f.normal - (f.normal_elastic - 2.0 * pull)).abs() < 1e-12);
 }
 
 /// Converts and analyses a finished YADE deck run (`YADE_SMOKE_DIR`, default

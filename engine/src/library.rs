@@ -13,6 +13,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "xcode-cohesive-smoke",
     "xcode-cohesive-classes-smoke",
     "xcode-sjkr-smoke",
+    "xcode-dmt-smoke",
     "ar07-A-n1372",
     "ar07-D-10kPa-n1372",
     "ar07-A",

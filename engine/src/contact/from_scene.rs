@@ -1,5 +1,6 @@
 //! Contact laws of a scene's `[law]` table, in reduced units.
 
+use crate::contact::dmt::Dmt;
 use crate::contact::hertz_mindlin::HertzMindlin;
 use crate::contact::linear::{Adhesion, Linear};
 use crate::contact::sjkr::Sjkr;
@@ -30,6 +31,18 @@ pub fn sjkr_law<F>(law: &Law, friction: F) -> Sjkr<F> {
     Sjkr {
         hertz: hertz_mindlin_law(law, friction),
         k: *k,
+    }
+}
+
+/// The Hertz–Mindlin law of a scene with YADE's DMT adhesion, γ in units of P_ref·a. Panics if
+/// `law` is not Hertz–Mindlin with `dmt`.
+pub fn dmt_law<F>(law: &Law, friction: F) -> Dmt<F> {
+    let Law::HertzMindlin { dmt: Some(g), .. } = law else {
+        panic!("dmt_law needs a Hertz–Mindlin law with dmt")
+    };
+    Dmt {
+        hertz: hertz_mindlin_law(law, friction),
+        gamma: *g,
     }
 }
 

@@ -7,9 +7,12 @@
 //!   rolling resistance; with no adhesion it is the classic cohesionless linear law.
 //! - [`sjkr::Sjkr`]: Hertz–Mindlin with LIGGGHTS 3.8's `cohesion sjkr` (attraction ∝ the area
 //!   of the contact circle), the cohesive law a LIGGGHTS run reproduces exactly.
+//! - [`dmt::Dmt`]: Hertz–Mindlin with YADE's DMT adhesion (a constant pull 4πR*γ in contact),
+//!   the cohesive law a YADE run reproduces exactly.
 //! - [`slider`]: the elastic-plastic sliders (Coulomb and rolling) shared by them.
 //! - [`from_scene`]: the law of a scene's `[law]` table, in reduced units.
 
+pub mod dmt;
 pub mod from_scene;
 pub mod hertz_mindlin;
 pub mod linear;

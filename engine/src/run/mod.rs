@@ -18,7 +18,7 @@ pub mod setup;
 pub mod stages;
 
 pub use crate::contact::from_scene::{
-    adhesion, hertz_mindlin_law, linear_law, rolling_spring, sjkr_law,
+    adhesion, dmt_law, hertz_mindlin_law, linear_law, rolling_spring, sjkr_law,
 };
 pub use checks::measure;
 pub use numerics::StageNumerics;
@@ -149,6 +149,15 @@ fn dispatch_law<D: Dim>(
 ) -> Result<(Snapshot, bool), RunError> {
     let law = &ctx.scene.law.clone();
     match law {
+        Law::HertzMindlin { dmt: Some(_), .. } => match mu {
+            Mu::Finite(0.0) => {
+                run_law::<D, _>(ctx, dmt_law(law, Frictionless), range, inside, opts)
+            }
+            Mu::Finite(m) => {
+                run_law::<D, _>(ctx, dmt_law(law, Coulomb { mu: m }), range, inside, opts)
+            }
+            Mu::Infinite => run_law::<D, _>(ctx, dmt_law(law, NoSlip), range, inside, opts),
+        },
         Law::HertzMindlin { sjkr: Some(_), .. } => match mu {
             Mu::Finite(0.0) => {
                 run_law::<D, _>(ctx, sjkr_law(law, Frictionless), range, inside, opts)

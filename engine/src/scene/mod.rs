@@ -157,6 +157,11 @@ pub enum Law {
         /// (`engine/src/contact/sjkr.rs`). Absent: no cohesion.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         sjkr: Option<f64>,
+        /// YADE's DMT adhesion (`Law2_ScGeom_MindlinPhys_Mindlin(includeAdhesion=True)`): a
+        /// constant pull 4πR*γ in contact, γ in units of P_ref·a (`engine/src/contact/dmt.rs`).
+        /// Absent: no adhesion.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        dmt: Option<f64>,
     },
     /// Linear spring–dashpot–Coulomb disks or spheres with optional short-range adhesion and
     /// rolling resistance (GRC07 §II.B).
@@ -732,7 +737,7 @@ impl Law {
     pub fn attractive(&self) -> bool {
         match self {
             Law::Linear { cohesion, .. } => cohesion.is_some(),
-            Law::HertzMindlin { sjkr, .. } => sjkr.is_some(),
+            Law::HertzMindlin { sjkr, dmt, .. } => sjkr.is_some() || dmt.is_some(),
         }
     }
     pub fn has_moments(&self) -> bool {

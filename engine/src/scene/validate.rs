@@ -153,6 +153,7 @@ impl Scene {
                 zeta,
                 poisson,
                 sjkr,
+                dmt,
             } => {
                 if self.dimension != 3 {
                     return Err(err(
@@ -174,6 +175,22 @@ impl Scene {
                         return Err(err(
                             "law.sjkr",
                             format!("must be a finite cohesion energy density ≥ 0 (units of P_ref), got {k}"),
+                        ));
+                    }
+                }
+                if let Some(g) = dmt {
+                    if !(g.is_finite() && *g >= 0.0) {
+                        return Err(err(
+                            "law.dmt",
+                            format!(
+                                "must be a finite surface energy γ ≥ 0 (units of P_ref·a), got {g}"
+                            ),
+                        ));
+                    }
+                    if sjkr.is_some() {
+                        return Err(err(
+                            "law.dmt",
+                            "cannot be combined with law.sjkr: give one cohesion law (LIGGGHTS's sjkr or YADE's dmt)".into(),
                         ));
                     }
                 }
@@ -523,6 +540,13 @@ mod tests {
         let e = err(&sjkr.replace("sjkr = 5000.0", "sjkr = -1.0"));
         assert_eq!(e.field, "law.sjkr", "{e}");
         assert!(e.message.contains("P_ref"), "{e}");
+        // DMT: γ ≥ 0, and one cohesion law at a time.
+        let dmt = crate::library::scene_text("xcode-dmt-smoke").unwrap();
+        let e = err(&dmt.replace("dmt = 0.2", "dmt = -0.2"));
+        assert_eq!(e.field, "law.dmt", "{e}");
+        let e = err(&dmt.replace("dmt = 0.2", "dmt = 0.2\nsjkr = 10.0"));
+        assert_eq!(e.field, "law.dmt", "{e}");
+        assert!(e.message.contains("sjkr"), "{e}");
     }
 
     #[test]

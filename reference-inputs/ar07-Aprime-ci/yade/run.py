@@ -3,7 +3,7 @@
 # N = 500, dimension 3, seed 1, start Φ = 0.610000, reduced units (a = 1, m(a) = 1, force unit P_ref a^(d-1))
 # The data file holds the grains after the hard-grain stages run by grainbench: hard-sphere-mix, grow
 # Deviations from the grainbench law and protocol:
-#   - hertz-damping: total normal force clipped at 0 (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force; viscous force scaled by (R1+R2)/d
+#   - hertz-damping: total normal force clipped at 0 without adhesion (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force
 #   - stress-control: AR07 (7) cell dynamics and rate cap integrated by a script servo (PyRunner each step, O.cell.velGrad) on the contact stress only; PeriTriaxController hunted around 1.01–1.09 P
 # Run: yade -n -x run.py (in this directory). Writes final.cell, final.bodies,
 # final.interactions, final.status (docs/external-formats/yade.md).
@@ -13,6 +13,8 @@ LENGTHS = (7.543037449186693, 7.543037449186693, 7.543037449186693)
 POISSON = 3e-1
 BETAN = 9.8e-1
 KAPPA0 = 3.9e4
+# DMT surface energy γ (pull 4πR*γ in contact; None: no adhesion).
+GAMMA = None
 # Generalized mass of the cell (AR07 (7)), as in grainbench.
 CELL_MASS = 5e2
 # One dict per DEM stage: kind, pressure (compress), strain-rate cap (1/time),
@@ -55,8 +57,9 @@ O.engines = [
     InteractionLoop(
         [Ig2_Sphere_Sphere_ScGeom()],
         [Ip2_FrictMat_FrictMat_MindlinPhys(betan=MatchMaker(algo='val', val=BETAN),
-                                           betas=MatchMaker(algo='val', val=0.0))],
-        [Law2_ScGeom_MindlinPhys_Mindlin()],
+                                           betas=MatchMaker(algo='val', val=0.0),
+                                           gamma=GAMMA or 0.0)],
+        [Law2_ScGeom_MindlinPhys_Mindlin(includeAdhesion=GAMMA is not None)],
     ),
     NewtonIntegrator(damping=0.0),
     # Isotropic stress servo of the cell (AR07 (7)), active in compress stages.

@@ -2,7 +2,7 @@
 # 3D frictionless Hertz packing, N = 500, κ = 1e4 (AR07 §III state A with a random gas start, reduced N)
 # N = 500, dimension 3, seed 1, start Φ = 0.300000, reduced units (a = 1, m(a) = 1, force unit P_ref a^(d-1))
 # Deviations from the grainbench law and protocol:
-#   - hertz-damping: total normal force clipped at 0 (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force; viscous force scaled by (R1+R2)/d
+#   - hertz-damping: total normal force clipped at 0 without adhesion (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force
 #   - stress-control: AR07 (7) cell dynamics and rate cap integrated by a script servo (PyRunner each step, O.cell.velGrad) on the contact stress only; PeriTriaxController hunted around 1.01–1.09 P
 # Run: yade -n -x run.py (in this directory). Writes final.cell, final.bodies,
 # final.interactions, final.status (docs/external-formats/yade.md).
@@ -12,6 +12,8 @@ LENGTHS = (9.556138980221696, 9.556138980221696, 9.556138980221696)
 POISSON = 3e-1
 BETAN = 9.8e-1
 KAPPA0 = 1e4
+# DMT surface energy γ (pull 4πR*γ in contact; None: no adhesion).
+GAMMA = None
 # Generalized mass of the cell (AR07 (7)), as in grainbench.
 CELL_MASS = 5e2
 # One dict per DEM stage: kind, pressure (compress), strain-rate cap (1/time),
@@ -54,8 +56,9 @@ O.engines = [
     InteractionLoop(
         [Ig2_Sphere_Sphere_ScGeom()],
         [Ip2_FrictMat_FrictMat_MindlinPhys(betan=MatchMaker(algo='val', val=BETAN),
-                                           betas=MatchMaker(algo='val', val=0.0))],
-        [Law2_ScGeom_MindlinPhys_Mindlin()],
+                                           betas=MatchMaker(algo='val', val=0.0),
+                                           gamma=GAMMA or 0.0)],
+        [Law2_ScGeom_MindlinPhys_Mindlin(includeAdhesion=GAMMA is not None)],
     ),
     NewtonIntegrator(damping=0.0),
     # Isotropic stress servo of the cell (AR07 (7)), active in compress stages.

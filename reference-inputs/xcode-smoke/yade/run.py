@@ -5,7 +5,7 @@
 # Deviations from the grainbench law and protocol:
 #   - mindlin-tangential: K_T exact; Ig2_Sphere_Sphere_ScGeom scales the relative translational slip by (R1+R2)/d = 1 + h/(R1+R2)
 #   - mindlin-unloading: Law2_ScGeom_MindlinPhys_Mindlin keeps T when N drops
-#   - hertz-damping: total normal force clipped at 0 (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force; viscous force scaled by (R1+R2)/d
+#   - hertz-damping: total normal force clipped at 0 without adhesion (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force
 #   - coulomb: Coulomb cap uses the total normal force (viscous part included)
 #   - stress-control: AR07 (7) cell dynamics and rate cap integrated by a script servo (PyRunner each step, O.cell.velGrad) on the contact stress only; PeriTriaxController hunted around 1.01–1.09 P
 # Run: yade -n -x run.py (in this directory). Writes final.cell, final.bodies,
@@ -16,6 +16,8 @@ LENGTHS = (6.678445065141403, 6.678445065141403, 6.678445065141403)
 POISSON = 3e-1
 BETAN = 9.8e-1
 KAPPA0 = 1e4
+# DMT surface energy γ (pull 4πR*γ in contact; None: no adhesion).
+GAMMA = None
 # Generalized mass of the cell (AR07 (7)), as in grainbench.
 CELL_MASS = 2.56e2
 # One dict per DEM stage: kind, pressure (compress), strain-rate cap (1/time),
@@ -58,8 +60,9 @@ O.engines = [
     InteractionLoop(
         [Ig2_Sphere_Sphere_ScGeom()],
         [Ip2_FrictMat_FrictMat_MindlinPhys(betan=MatchMaker(algo='val', val=BETAN),
-                                           betas=MatchMaker(algo='val', val=0.0))],
-        [Law2_ScGeom_MindlinPhys_Mindlin()],
+                                           betas=MatchMaker(algo='val', val=0.0),
+                                           gamma=GAMMA or 0.0)],
+        [Law2_ScGeom_MindlinPhys_Mindlin(includeAdhesion=GAMMA is not None)],
     ),
     NewtonIntegrator(damping=0.0),
     # Isotropic stress servo of the cell (AR07 (7)), active in compress stages.

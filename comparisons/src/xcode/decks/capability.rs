@@ -65,6 +65,9 @@ pub enum Feature {
     /// LIGGGHTS 3.8's `cohesion sjkr`: attraction k·πa² in contact, πa² the area of the
     /// spheres' intersection circle (`engine/src/contact/sjkr.rs`).
     SjkrCohesion,
+    /// YADE's DMT adhesion: a constant pull 4πR*γ in contact, its dashpot capped at the pull
+    /// while the contact is tensile (`engine/src/contact/dmt.rs`).
+    DmtAdhesion,
     /// Rolling spring K_r with cap μ_r N_e (GRC07 (9)–(10)).
     Rolling,
     /// Rolling resistance between grains of more than [`MAX_CLASSES`](super::lammps_table::MAX_CLASSES)
@@ -97,7 +100,7 @@ pub enum Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 25] = [
+    pub const ALL: [Feature; 26] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -109,6 +112,7 @@ impl Feature {
         Feature::Adhesion,
         Feature::AdhesionContinuousSizes,
         Feature::SjkrCohesion,
+        Feature::DmtAdhesion,
         Feature::Rolling,
         Feature::RollingContinuousSizes,
         Feature::TangentialDamping,
@@ -138,6 +142,7 @@ impl Feature {
             Feature::Adhesion => "adhesion",
             Feature::AdhesionContinuousSizes => "adhesion-continuous-sizes",
             Feature::SjkrCohesion => "sjkr-cohesion",
+            Feature::DmtAdhesion => "dmt-adhesion",
             Feature::Rolling => "rolling-resistance",
             Feature::RollingContinuousSizes => "rolling-continuous-sizes",
             Feature::TangentialDamping => "tangential-damping",
@@ -168,6 +173,7 @@ impl Feature {
             Feature::Adhesion => "pull -F0 in contact, linear attraction over D0 (GRC07 (4)-(5))",
             Feature::AdhesionContinuousSizes => "adhesion between continuously distributed diameters (more than 16 distinct; `particles.classes` gives classes)",
             Feature::SjkrCohesion => "LIGGGHTS `cohesion sjkr`: attraction k·πa² in contact (a: radius of the contact circle)",
+            Feature::DmtAdhesion => "YADE's DMT adhesion: constant pull 4πR*γ in contact (`includeAdhesion`)",
             Feature::Rolling => "rolling spring K_r, cap μ_r N_e (GRC07 (9)-(10))",
             Feature::RollingContinuousSizes => "rolling resistance between continuously distributed diameters (more than 16 distinct; `particles.classes` gives classes)",
             Feature::TangentialDamping => "tangential/rolling viscosity (grainbench option)",
@@ -193,11 +199,14 @@ pub fn features(start: &Start) -> Vec<Feature> {
     let mut f = Vec::new();
     let any_mu = |pred: &dyn Fn(Mu) -> bool| start.stages.iter().any(|s| pred(s.mu));
     match start.law() {
-        Law::HertzMindlin { sjkr, .. } => {
+        Law::HertzMindlin { sjkr, dmt, .. } => {
             f.push(Feature::HertzNormal);
             f.push(Feature::HertzDamping);
             if sjkr.is_some() {
                 f.push(Feature::SjkrCohesion);
+            }
+            if dmt.is_some() {
+                f.push(Feature::DmtAdhesion);
             }
             if any_mu(&|m| m.value() > 0.0) {
                 f.push(Feature::MindlinTangential);
@@ -308,6 +317,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Adhesion => Exact,
             F::AdhesionContinuousSizes if code == Code::Lammps2025 => Exact,
             F::SjkrCohesion => Unsupported("no area-proportional cohesion in `granular` (`dmt` and `jkr` are other laws); not generated"),
+            F::DmtAdhesion => Unsupported("`granular dmt` has the same pull but neither YADE's capped dashpot nor its Coulomb cap; not generated"),
             F::AdhesionContinuousSizes => Unsupported("pair_style table sees only r and the atom types, so the attraction is one table per pair of diameter classes: give the scene `particles.classes` (at most 16)"),
             F::Rolling => Approximate("`rolling sds` per pair of diameter classes, k_roll = K_r/R*², μ_roll = μ_r/R*: the moment cap uses the total normal force (damping included)"),
             F::RollingContinuousSizes => Unsupported("`rolling sds` takes K_r/R*² and μ_r/R* per pair of atom types: give the scene `particles.classes` (at most 16)"),
@@ -330,6 +340,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::Adhesion => Unsupported("cohesion sjkr/sjkr2 give a force ∝ contact area, zero at first touch, with no range"),
             F::AdhesionContinuousSizes => Unsupported(NO_GRC07_ADHESION),
             F::SjkrCohesion => Exact,
+            F::DmtAdhesion => Unsupported("no constant-pull cohesion model (sjkr/sjkr2 are ∝ contact area)"),
             F::Rolling => Unsupported("rolling_friction epsd3 not generated"),
             F::RollingContinuousSizes => Unsupported(NO_ROLLING),
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),
@@ -345,13 +356,14 @@ pub fn support(code: Code, f: Feature) -> Support {
         Code::Yade => match f {
             F::MindlinTangential => Approximate("K_T exact; Ig2_Sphere_Sphere_ScGeom scales the relative translational slip by (R1+R2)/d = 1 + h/(R1+R2)"),
             F::MindlinUnloading => Approximate("Law2_ScGeom_MindlinPhys_Mindlin keeps T when N drops"),
-            F::HertzDamping => Approximate("total normal force clipped at 0 (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force; viscous force scaled by (R1+R2)/d"),
+            F::HertzDamping => Approximate("total normal force clipped at 0 without adhesion (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force"),
             F::Coulomb => Approximate("Coulomb cap uses the total normal force (viscous part included)"),
             F::NoSlip => Approximate("μ = ∞ given as friction angle atan(1e300) (tan ≈ 1.6e16); T still drops to 0 while the total normal force is clipped"),
             F::LinearSprings | F::LinearDamping => Unsupported("Law2_ScGeom_FrictPhys_CundallStrack has no dashpot and ViscElPhys is wrong in a deforming periodic cell"),
             F::Adhesion => Unsupported("CohFrictMat gives a spring to −F0 then constant −F0 (not generated)"),
             F::AdhesionContinuousSizes => Unsupported(NO_GRC07_ADHESION),
             F::SjkrCohesion => Unsupported("no area-proportional cohesion law (CohFrictMat bonds are another law)"),
+            F::DmtAdhesion => Exact,
             F::Rolling => Unsupported("moment law not generated"),
             F::RollingContinuousSizes => Unsupported(NO_ROLLING),
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),

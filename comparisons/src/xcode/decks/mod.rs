@@ -326,6 +326,15 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
             {
                 None
             }
+            // With DMT adhesion YADE neither clips the normal force nor leaves its velocity
+            // scaling out of our law (engine/src/contact/dmt.rs).
+            Support::Approximate(_)
+                if code == Code::Yade
+                    && *f == Feature::HertzDamping
+                    && matches!(start.law(), Law::HertzMindlin { dmt: Some(_), .. }) =>
+            {
+                None
+            }
             Support::Approximate(why) if adhesive_lammps => {
                 Some(lammps::adhesive_deviation(*f, why, code))
             }

@@ -2,7 +2,8 @@
 //! grains (`grains.txt`).
 //!
 //! Law: `FrictMat` + `Ip2_FrictMat_FrictMat_MindlinPhys(betan=ζ, betas=0)` +
-//! `Law2_ScGeom_MindlinPhys_Mindlin`; for identical materials YADE's kno = (4/3)(E*)√R* with
+//! `Law2_ScGeom_MindlinPhys_Mindlin`, with `gamma=γ` and `includeAdhesion=True` when the scene's
+//! law has `dmt = γ` (engine/src/contact/dmt.rs); for identical materials YADE's kno = (4/3)(E*)√R* with
 //! E* = E/(2(1−ν²)), i.e. N = (2/3)Ẽ√R* h^{3/2}: our law with young E = Ẽ(1−ν²), Ẽ = κ^{3/2}.
 //! Stress control: a servo in the script (a `PyRunner` every step) integrating our cell
 //! dynamics, AR07 (7) M L̈_α = (Ω/L_α)(σ_αα − P) with the strain-rate cap, and imposing
@@ -34,10 +35,12 @@ fn py(x: f64) -> String {
 
 /// The yade deck of `start`.
 pub fn deck(start: &Start, deviations: &[String]) -> Deck {
-    let (poisson, zeta) = match start.law() {
-        Law::HertzMindlin { poisson, zeta, .. } => (*poisson, *zeta),
+    let (poisson, zeta, gamma) = match start.law() {
+        Law::HertzMindlin {
+            poisson, zeta, dmt, ..
+        } => (*poisson, *zeta, *dmt),
         // Refused by the capability matrix; keep the generator total.
-        Law::Linear { zeta, .. } => (0.3, *zeta),
+        Law::Linear { zeta, .. } => (0.3, *zeta, None),
     };
     let mut s = String::new();
     for line in header_lines(start, Code::Yade, deviations) {
@@ -47,6 +50,7 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
     s.push_str("# final.interactions, final.status (docs/external-formats/yade.md).\n\n");
     s.push_str(&format!(
         "N = {}\nLENGTHS = ({})\nPOISSON = {}\nBETAN = {}\nKAPPA0 = {}\n\
+         # DMT surface energy γ (pull 4πR*γ in contact; None: no adhesion).\nGAMMA = {}\n\
          # Generalized mass of the cell (AR07 (7)), as in grainbench.\nCELL_MASS = {}\n",
         start.n(),
         start
@@ -61,6 +65,7 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
             .stages
             .first()
             .map_or(start.law().kappa(), |s| s.kappa)),
+        gamma.map_or("None".to_string(), py),
         py(grainbench_engine::run::cell_mass(
             &start.scene.numerics,
             start.mass.iter().sum(),
@@ -157,8 +162,9 @@ O.engines = [
     InteractionLoop(
         [Ig2_Sphere_Sphere_ScGeom()],
         [Ip2_FrictMat_FrictMat_MindlinPhys(betan=MatchMaker(algo='val', val=BETAN),
-                                           betas=MatchMaker(algo='val', val=0.0))],
-        [Law2_ScGeom_MindlinPhys_Mindlin()],
+                                           betas=MatchMaker(algo='val', val=0.0),
+                                           gamma=GAMMA or 0.0)],
+        [Law2_ScGeom_MindlinPhys_Mindlin(includeAdhesion=GAMMA is not None)],
     ),
     NewtonIntegrator(damping=0.0),
     # Isotropic stress servo of the cell (AR07 (7)), active in compress stages.
