@@ -24,26 +24,20 @@ pub fn hertz_mindlin_law<F>(law: &Law, friction: F) -> HertzMindlin<F> {
 
 /// The Hertz–Mindlin law of a scene with its SJKR cohesion (LIGGGHTS `cohesion sjkr`), k in
 /// units of P_ref. Panics if `law` is not Hertz–Mindlin with `sjkr`.
-pub fn sjkr_law<F>(law: &Law, friction: F) -> Sjkr<F> {
+pub fn sjkr_law<F>(law: &Law, friction: F) -> HertzMindlin<F, Sjkr> {
     let Law::HertzMindlin { sjkr: Some(k), .. } = law else {
         panic!("sjkr_law needs a Hertz–Mindlin law with sjkr")
     };
-    Sjkr {
-        hertz: hertz_mindlin_law(law, friction),
-        k: *k,
-    }
+    hertz_mindlin_law(law, friction).with_cohesion(Sjkr { k: *k })
 }
 
 /// The Hertz–Mindlin law of a scene with YADE's DMT adhesion, γ in units of P_ref·a. Panics if
 /// `law` is not Hertz–Mindlin with `dmt`.
-pub fn dmt_law<F>(law: &Law, friction: F) -> Dmt<F> {
+pub fn dmt_law<F>(law: &Law, friction: F) -> HertzMindlin<F, Dmt> {
     let Law::HertzMindlin { dmt: Some(g), .. } = law else {
         panic!("dmt_law needs a Hertz–Mindlin law with dmt")
     };
-    Dmt {
-        hertz: hertz_mindlin_law(law, friction),
-        gamma: *g,
-    }
+    hertz_mindlin_law(law, friction).with_cohesion(Dmt { gamma: *g })
 }
 
 /// The linear law of a scene in reduced units (K_N = κ, K_T = κ·kt_over_kn) with the given

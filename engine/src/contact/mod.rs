@@ -2,13 +2,14 @@
 //! use (friction, rolling resistance, cohesion) are type parameters that compile to nothing,
 //! so a frictionless scene runs a kernel with no tangential state at all.
 //!
-//! - [`hertz_mindlin::HertzMindlin`]: AR07 (1)–(5), App. A (Walton rescaling), App. B (transport).
+//! - [`hertz_mindlin::HertzMindlin`]: AR07 (1)–(5), App. A (Walton rescaling), App. B (transport);
+//!   its cohesion models (one file each):
+//!   - [`sjkr::Sjkr`]: LIGGGHTS 3.8's `cohesion sjkr` (attraction ∝ the area of the contact
+//!     circle), the cohesive law a LIGGGHTS run reproduces exactly;
+//!   - [`dmt::Dmt`]: YADE's DMT adhesion (a constant pull 4πR*γ in contact), the cohesive law a
+//!     YADE run reproduces exactly.
 //! - [`linear::Linear`]: GRC07 (4)–(10): spring–dashpot–Coulomb with optional adhesion and
 //!   rolling resistance; with no adhesion it is the classic cohesionless linear law.
-//! - [`sjkr::Sjkr`]: Hertz–Mindlin with LIGGGHTS 3.8's `cohesion sjkr` (attraction ∝ the area
-//!   of the contact circle), the cohesive law a LIGGGHTS run reproduces exactly.
-//! - [`dmt::Dmt`]: Hertz–Mindlin with YADE's DMT adhesion (a constant pull 4πR*γ in contact),
-//!   the cohesive law a YADE run reproduces exactly.
 //! - [`slider`]: the elastic-plastic sliders (Coulomb and rolling) shared by them.
 //! - [`from_scene`]: the law of a scene's `[law]` table, in reduced units.
 

@@ -1,23 +1,22 @@
-//! Hertz–Mindlin spheres with LIGGGHTS 3.8's `cohesion sjkr` (`cohesion_model_sjkr.h`): in
-//! contact, an attraction k·A along the normal, A = πa² the area of the circle in which the
-//! two spheres' surfaces intersect, k the cohesion energy density (`cohesionEnergyDensity`);
-//! nothing at or beyond first touch (A = 0 there), no range.
+//! LIGGGHTS 3.8's `cohesion sjkr` (`cohesion_model_sjkr.h`) as a cohesion model of
+//! [`HertzMindlin`](super::hertz_mindlin::HertzMindlin): in contact, an attraction k·A along the
+//! normal, A = πa² the area of the circle in which the two spheres' surfaces intersect, k the
+//! cohesion energy density (`cohesionEnergyDensity`); nothing at or beyond first touch (A = 0
+//! there), no range.
 //!
-//! The law LIGGGHTS runs, term by term: the Hertz normal force and its dashpot
-//! ([`HertzMindlin`]), plus −k·A, and a Coulomb cap μ|N| on the *total* normal force (LIGGGHTS
-//! adds the cohesion to the normal force before its tangential model reads it). The
-//! tangential spring is ours (incremental, Walton-rescaled; LIGGGHTS's `tangential history` is a
-//! total-displacement law): frictionless scenes are identical in both codes.
+//! The law LIGGGHTS runs, term by term: the Hertz normal force and its dashpot, plus −k·A, and a
+//! Coulomb cap μ|N| on the *total* normal force (LIGGGHTS adds the cohesion to the normal force
+//! before its tangential model reads it). The tangential spring is ours (incremental,
+//! Walton-rescaled; LIGGGHTS's `tangential history` is a total-displacement law): frictionless
+//! scenes are identical in both codes.
 
-use super::hertz_mindlin::HertzMindlin;
-use super::slider::Friction;
-use super::{ContactLaw, Pair, PairForce};
-use crate::geometry::{Dim, VectorOps};
+use super::hertz_mindlin::HertzCohesion;
+use super::Pair;
+use crate::geometry::Dim;
 
-/// Hertz–Mindlin plus the SJKR attraction k·πa².
+/// The SJKR attraction k·πa².
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sjkr<F> {
-    pub hertz: HertzMindlin<F>,
+pub struct Sjkr {
     /// Cohesion energy density k (force per area).
     pub k: f64,
 }
@@ -33,80 +32,27 @@ pub fn contact_area(h: f64, r_eff: f64, r_sum: f64) -> f64 {
     std::f64::consts::FRAC_PI_4 * h * (4.0 * r_eff * r_sum - h * s) * s / (r * r)
 }
 
-impl<D: Dim, F: Friction> ContactLaw<D> for Sjkr<F> {
-    type History = F::State<D>;
-    const MOMENTS: bool = F::ACTIVE;
-    const ROLLING: bool = false;
+impl HertzCohesion for Sjkr {
+    const ACTIVE: bool = true;
 
     #[inline(always)]
-    fn range(&self) -> f64 {
-        0.0
-    }
-
-    #[inline(always)]
-    fn interact(&self, p: &Pair<D>, hist: &mut Self::History, dt: f64) -> PairForce<D> {
-        if p.gap >= 0.0 {
-            *hist = Default::default();
-            return PairForce::default();
-        }
-        let h = -p.gap;
-        let kn = self.hertz.normal_stiffness(h, p.r_eff);
-        let ne = 2.0 / 3.0 * kn * h;
-        let vn = p.v_contact.dot(&p.n);
-        let alpha = 2.0 * self.hertz.zeta * (p.m_eff * kn).sqrt();
-        let normal = ne - alpha * vn - self.k * contact_area(h, p.r_eff, p.r_sum);
-        let tangential = if F::ACTIVE {
-            let slip = (p.v_contact - p.n * vn) * dt;
-            let pivot = 0.5 * D::pivot_rate(p.w_i + p.w_j, p.n) * dt;
-            // LIGGGHTS's cap: μ|N| with the attraction and the dashpot in N.
-            self.hertz.friction.update::<D>(
-                hist,
-                p.n,
-                pivot,
-                slip,
-                self.hertz.kt_ratio * kn,
-                normal.abs(),
-            )
-        } else {
-            D::V::zero()
-        };
-        PairForce {
-            normal,
-            normal_elastic: ne,
-            tangential,
-            rolling: D::Ang::zero(),
-        }
-    }
-
-    fn max_stiffness(&self, force: f64, r_eff_max: f64) -> f64 {
-        // The attraction softens contacts (dN/dh falls by 2πk R* near first touch).
-        <HertzMindlin<F> as ContactLaw<D>>::max_stiffness(&self.hertz, force, r_eff_max)
-    }
-
-    fn with_kappa_scaled(&self, factor: f64) -> Self {
-        Sjkr {
-            hertz: <HertzMindlin<F> as ContactLaw<D>>::with_kappa_scaled(&self.hertz, factor),
-            k: self.k,
-        }
+    fn normal<D: Dim>(&self, ne: f64, viscous: f64, p: &Pair<D>) -> (f64, f64) {
+        let n = ne - viscous - self.k * contact_area(-p.gap, p.r_eff, p.r_sum);
+        // LIGGGHTS's cap: μ|N| with the attraction and the dashpot in N.
+        (n, n.abs())
     }
 
     fn describe(&self) -> String {
-        format!(
-            "{} sjkr k={}",
-            <HertzMindlin<F> as ContactLaw<D>>::describe(&self.hertz),
-            self.k
-        )
-    }
-
-    fn stored(&self, hist: &Self::History) -> (D::V, D::Ang) {
-        (F::force::<D>(hist), D::Ang::zero())
+        format!(" sjkr k={}", self.k)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::hertz_mindlin::HertzMindlin;
     use crate::contact::slider::Frictionless;
+    use crate::contact::ContactLaw;
     use crate::geometry::D3;
     use nalgebra::Vector3 as V3;
 
@@ -145,7 +91,7 @@ mod tests {
     #[test]
     fn attraction_adds_to_hertz_in_contact_only() {
         let hertz = HertzMindlin::new(1e6, 0.3, 0.5, Frictionless);
-        let law = Sjkr { hertz, k: 5000.0 };
+        let law = hertz.with_cohesion(Sjkr { k: 5000.0 });
         let mut hist = ();
         for (h, v) in [(1e-4, 0.0), (5e-4, 0.02), (2e-3, -0.01)] {
             let p = pair(h, 0.5, 0.35, v);
