@@ -30,7 +30,10 @@ pub use setup::{
 };
 pub use stages::{compress_until, prepared_grains, run_protocol};
 
+use crate::contact::dmt::Dmt;
+use crate::contact::hertz_mindlin::{HertzCohesion, NoCohesion as HertzNoCohesion};
 use crate::contact::linear::{CohesionModel, NoCohesion};
+use crate::contact::sjkr::Sjkr;
 use crate::contact::slider::{Coulomb, Friction, Frictionless, NoRolling, NoSlip};
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, D2, D3};
@@ -149,47 +152,41 @@ fn dispatch_law<D: Dim>(
 ) -> Result<(Snapshot, bool), RunError> {
     let law = &ctx.scene.law.clone();
     match law {
-        Law::HertzMindlin { dmt: Some(_), .. } => match mu {
-            Mu::Finite(0.0) => {
-                run_law::<D, _>(ctx, dmt_law(law, Frictionless), range, inside, opts)
-            }
-            Mu::Finite(m) => {
-                run_law::<D, _>(ctx, dmt_law(law, Coulomb { mu: m }), range, inside, opts)
-            }
-            Mu::Infinite => run_law::<D, _>(ctx, dmt_law(law, NoSlip), range, inside, opts),
-        },
-        Law::HertzMindlin { sjkr: Some(_), .. } => match mu {
-            Mu::Finite(0.0) => {
-                run_law::<D, _>(ctx, sjkr_law(law, Frictionless), range, inside, opts)
-            }
-            Mu::Finite(m) => {
-                run_law::<D, _>(ctx, sjkr_law(law, Coulomb { mu: m }), range, inside, opts)
-            }
-            Mu::Infinite => run_law::<D, _>(ctx, sjkr_law(law, NoSlip), range, inside, opts),
-        },
-        Law::HertzMindlin { .. } => match mu {
-            Mu::Finite(0.0) => run_law::<D, _>(
-                ctx,
-                hertz_mindlin_law(law, Frictionless),
-                range,
-                inside,
-                opts,
-            ),
-            Mu::Finite(m) => run_law::<D, _>(
-                ctx,
-                hertz_mindlin_law(law, Coulomb { mu: m }),
-                range,
-                inside,
-                opts,
-            ),
-            Mu::Infinite => {
-                run_law::<D, _>(ctx, hertz_mindlin_law(law, NoSlip), range, inside, opts)
-            }
+        Law::HertzMindlin { sjkr, dmt, .. } => match (sjkr, dmt) {
+            (Some(k), _) => hertz_friction::<D, _>(ctx, Sjkr { k: *k }, mu, range, inside, opts),
+            (_, Some(g)) => hertz_friction::<D, _>(ctx, Dmt { gamma: *g }, mu, range, inside, opts),
+            _ => hertz_friction::<D, _>(ctx, HertzNoCohesion, mu, range, inside, opts),
         },
         Law::Linear { cohesion, .. } => match cohesion {
             Some(c) => linear_friction::<D, _>(ctx, adhesion(c), mu, range, inside, opts),
             None => linear_friction::<D, _>(ctx, NoCohesion, mu, range, inside, opts),
         },
+    }
+}
+
+/// The Hertz–Mindlin law of the scene with cohesion model `c` and the friction kind of `mu`.
+fn hertz_friction<D: Dim, C: HertzCohesion>(
+    ctx: &mut Ctx<D>,
+    c: C,
+    mu: Mu,
+    range: std::ops::Range<usize>,
+    inside: Option<(Header, Vec<u8>)>,
+    opts: &mut RunOptions,
+) -> Result<(Snapshot, bool), RunError> {
+    let law = &ctx.scene.law.clone();
+    match mu {
+        Mu::Finite(0.0) => {
+            let l = hertz_mindlin_law(law, Frictionless).with_cohesion(c);
+            run_law::<D, _>(ctx, l, range, inside, opts)
+        }
+        Mu::Finite(m) => {
+            let l = hertz_mindlin_law(law, Coulomb { mu: m }).with_cohesion(c);
+            run_law::<D, _>(ctx, l, range, inside, opts)
+        }
+        Mu::Infinite => {
+            let l = hertz_mindlin_law(law, NoSlip).with_cohesion(c);
+            run_law::<D, _>(ctx, l, range, inside, opts)
+        }
     }
 }
 

@@ -318,20 +318,8 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
     let deviations: Vec<String> = feats
         .iter()
         .filter_map(|f| match capability::support(code, *f) {
-            // The restitution cap does not bite at this ζ: LIGGGHTS's damping is ours.
             Support::Approximate(_)
-                if code == Code::Liggghts
-                    && *f == Feature::HertzDamping
-                    && matches!(start.law(), Law::HertzMindlin { zeta, .. } if liggghts::damping_exact(*zeta)) =>
-            {
-                None
-            }
-            // With DMT adhesion YADE neither clips the normal force nor leaves its velocity
-            // scaling out of our law (engine/src/contact/dmt.rs).
-            Support::Approximate(_)
-                if code == Code::Yade
-                    && *f == Feature::HertzDamping
-                    && matches!(start.law(), Law::HertzMindlin { dmt: Some(_), .. }) =>
+                if *f == Feature::HertzDamping && damping_exact(code, start.law()) =>
             {
                 None
             }
@@ -360,6 +348,17 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
         serde_json::to_string_pretty(&meta).expect("meta encodes") + "\n",
     ));
     Ok(deck)
+}
+
+/// Is the matrix's `hertz-damping` deviation void for this law? LIGGGHTS's restitution cap does
+/// not bite at ζ ≤ 0.63; with DMT adhesion YADE does not clip the normal force, and the rest of
+/// its damping is our law (engine/src/contact/dmt.rs).
+fn damping_exact(code: Code, law: &Law) -> bool {
+    match (code, law) {
+        (Code::Liggghts, Law::HertzMindlin { zeta, .. }) => liggghts::damping_exact(*zeta),
+        (Code::Yade, Law::HertzMindlin { dmt, .. }) => dmt.is_some(),
+        _ => false,
+    }
 }
 
 impl Start {
