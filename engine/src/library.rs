@@ -12,6 +12,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "xcode-smoke",
     "xcode-cohesive-smoke",
     "xcode-cohesive-classes-smoke",
+    "xcode-cohesive-rr-smoke",
     "xcode-sjkr-smoke",
     "xcode-dmt-smoke",
     "ar07-A-n1372",

@@ -93,7 +93,7 @@ pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
 
 /// What the relaxation's settling test sees at one check: the interaction list, and whether
 /// the assembly is at rest — the kinetic criterion and, under stress control, the stress
-/// criterion hold (a gas at rest before a slow compression has an unchanged, empty list: it
+/// criterion hold, to `factor` (`relax.settle_factor`; a gas at rest before a slow compression has an unchanged, empty list: it
 /// must not be taken for a settled packing). With `free_rollers` (GRC07 §III.A, no rolling
 /// resistance), grains with exactly one interaction roll freely on their partner: their pairs
 /// and their kinetic energy are left out (the energy per grain still divided by all N, as in
@@ -104,11 +104,12 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     inter: &[system::Interaction<D>],
     checks: &Checks,
     free_rollers: bool,
+    factor: f64,
 ) -> Settling {
     if !free_rollers {
         return Settling {
             pairs: None,
-            at_rest: checks.kinetic_ratio < 1.0 && checks.stress_ratio < 1.0,
+            at_rest: checks.kinetic_ratio < factor && checks.stress_ratio < factor,
             rollers: 0,
         };
     }
@@ -137,8 +138,8 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
         .sum();
     Settling {
         pairs: Some(pairs),
-        at_rest: ke / sys.len() as f64 / (num.kinetic * num.f_ref) < 1.0
-            && checks.stress_ratio < 1.0,
+        at_rest: ke / sys.len() as f64 / (num.kinetic * num.f_ref) < factor
+            && checks.stress_ratio < factor,
         rollers: degree.iter().filter(|&&d| d == 1).count(),
     }
 }

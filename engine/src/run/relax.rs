@@ -87,6 +87,11 @@ impl<D: Dim> StageWatch<D> {
         self.relax.is_some_and(|r| r.free_rollers)
     }
 
+    /// Factor on the kinetic and stress criteria for the switch (`relax.settle_factor`).
+    pub fn settle_factor(&self) -> f64 {
+        self.relax.map_or(1.0, |r| r.settle_factor)
+    }
+
     /// Whether the damped phase is on.
     pub fn damping_on(&self) -> bool {
         self.switch.is_some()
@@ -271,6 +276,7 @@ mod tests {
             tangential_zeta: 0.0,
             settle_time: 2.0,
             free_rollers: false,
+            settle_factor: 1.0,
         }
     }
 

@@ -411,7 +411,14 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             let observed = watch.watching()
                 && watch.observe_structure(
                     sys.time,
-                    settle_view(sys, &num, &inter, &checks, watch.free_rollers()),
+                    settle_view(
+                        sys,
+                        &num,
+                        &inter,
+                        &checks,
+                        watch.free_rollers(),
+                        watch.settle_factor(),
+                    ),
                     &mut pair_list(&inter),
                     checks.packing_fraction,
                     &sys.s,

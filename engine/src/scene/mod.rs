@@ -474,7 +474,8 @@ impl Step {
 }
 
 /// Final relaxation of a DEM stage (issue 12; engine/src/relax.rs): once the interaction list
-/// has been unchanged for `settle_time` with the kinetic and stress criteria met, the peculiar velocities
+/// has been unchanged for `settle_time` with the kinetic and stress criteria met (to
+/// `settle_factor`), the peculiar velocities
 /// and spins are damped at rate `damping` (v ← v e^{−γ dt} each step) and, when
 /// `tangential_zeta` > 0, tangential and rolling dashpots of that fraction of critical act in
 /// the contacts, until the criteria hold. Before the switch the law is the paper's, exactly.
@@ -498,6 +499,12 @@ pub struct Relax {
     /// Needs a cohesive law without rolling resistance.
     #[serde(default)]
     pub free_rollers: bool,
+    /// The switch needs the kinetic and stress criteria met to this factor (≥ 1, default 1):
+    /// for soft scenes (κ ≈ 1e4) whose undamped rolling modes keep the kinetic energy a few
+    /// times above GRC07's tolerance while the interaction list stays unchanged. The stage
+    /// still ends on the criteria themselves.
+    #[serde(default = "one")]
+    pub settle_factor: f64,
 }
 
 /// Equilibrium criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), in units of a force scale

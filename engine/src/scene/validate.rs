@@ -392,6 +392,7 @@ impl Scene {
                     positive(&f("relax.damping"), r.damping)?;
                     in_range(&f("relax.settle_time"), r.settle_time, 0.0, step.max_time())?;
                     in_range(&f("relax.tangential_zeta"), r.tangential_zeta, 0.0, 1.0)?;
+                    in_range(&f("relax.settle_factor"), r.settle_factor, 1.0, 1e6)?;
                     let no_rr = matches!(self.law, Law::Linear { rolling: None, .. });
                     if r.free_rollers && !(cohesive && no_rr) {
                         return Err(err(
@@ -478,6 +479,11 @@ mod tests {
             "relax = { damping = 1.0, tangential_zeta = 2.0, settle_time = 1.0 }",
         ));
         assert_eq!(e.field, "protocol[0].relax.tangential_zeta", "{e}");
+        let e = err(&BASE.replace(
+            relax,
+            "relax = { damping = 1.0, settle_time = 1.0, settle_factor = 0.5 }",
+        ));
+        assert_eq!(e.field, "protocol[0].relax.settle_factor", "{e}");
         // Free rollers (GRC07 §III.A) exist only without rolling resistance.
         let rollers = "relax = { damping = 1.0, settle_time = 10.0, free_rollers = true }";
         let e = err(&BASE.replace(relax, rollers));

@@ -619,7 +619,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
 /// say it. Phase A runs the law as it is in chunks of `settle_time` and switches when, at the end
 /// of a chunk, the number of contacts (`compute contact/atom`: touching pairs, not the list) is
 /// the one at the end of the previous chunk and the kinetic (without one-contact grains with
-/// `free_rollers`) and stress criteria hold. Phase B damps the velocities with `fix langevin` at
+/// `free_rollers`) and stress criteria hold to `settle_factor`. Phase B damps the velocities with `fix langevin` at
 /// T = 0 (drag −m v γ; spins at LAMMPS's rotational rate) and adds the tangential dashpot, until
 /// the criteria hold over the window: runs stopped by `fix halt` when they first hold, then a
 /// window-long run stopped when they break.
@@ -637,13 +637,14 @@ fn relaxed_stage(
     let settle = ((relax.settle_time / st.dt).ceil() as u64).max(st.check_every);
     let window = ((st.window / st.dt).ceil() as u64).max(st.check_every);
     let every = st.check_every;
-    let mut rest = vec![format!("(c_eks{k}/{n}<{})", num(tol.kinetic_per_grain))];
+    let f = relax.settle_factor;
+    let mut rest = vec![format!("(c_eks{k}/{n}<{})", num(f * tol.kinetic_per_grain))];
     if let StageKind::Compress { pressure } = st.kind {
         for a in 1..=start.dimension {
             rest.push(format!(
                 "(abs(c_pvir[{a}]-{})<{})",
                 num(pressure),
-                num(tol.stress)
+                num(f * tol.stress)
             ));
         }
     }
@@ -656,9 +657,9 @@ fn relaxed_stage(
     let plain = pair_coeff(start, st.kappa, st.mu, code, 0.0);
     let _ = write!(
         s,
-        "# Final relaxation (relax = {{ damping = {gamma}, tangential_zeta = {zt}, settle_time = {st_time}, free_rollers = {fr} }}).\n\
+        "# Final relaxation (relax = {{ damping = {gamma}, tangential_zeta = {zt}, settle_time = {st_time}, free_rollers = {fr}, settle_factor = {sf} }}).\n\
          # Phase A: the law as it is, in chunks of settle_time ({settle} steps), until the contact count is\n\
-         # unchanged over a chunk with the kinetic{fr_note} and stress criteria met.\n\
+         # unchanged over a chunk with the kinetic{fr_note} and stress criteria met (to settle_factor).\n\
          variable end{k} equal $(step+{max})\n\
          compute ncs{k} all reduce sum c_cn\n\
          variable ncnt{k} equal c_ncs{k}\n\
@@ -701,6 +702,7 @@ fn relaxed_stage(
         zt = num(relax.tangential_zeta),
         st_time = num(relax.settle_time),
         fr = relax.free_rollers,
+        sf = num(relax.settle_factor),
         fr_note = if relax.free_rollers { " (one-contact grains left out)" } else { "" },
         max = st.max_steps,
         rest = rest.join("*"),
@@ -834,19 +836,10 @@ mod tests {
 
     /// Rolling resistance on a class scene: one `rolling sds` line per pair of classes, with
     /// k_roll = K_r/R*² and μ_roll = μ_r/R*, in both versions; the relaxation's lines carry
-    /// γ_roll = 2ζ_t√(K_r m*)/R*.
+    /// γ_roll = 2ζ_t√(K_r m*)/R*; the switch to it tests the criteria to `settle_factor`.
     #[test]
     fn rolling_resistance_is_per_class_pair() {
-        let mut scene = grainbench_engine::library::scene("xcode-cohesive-classes-smoke")
-            .unwrap()
-            .unwrap();
-        if let Law::Linear { rolling, .. } = &mut scene.law {
-            *rolling = Some(grainbench_engine::scene::Rolling {
-                kr: 1e-4,
-                mu_r: 0.005,
-            });
-        }
-        let start = Start::of(&scene).unwrap();
+        let start = library_start("xcode-cohesive-rr-smoke");
         for code in [Code::Lammps, Code::Lammps2025] {
             let deck = super::super::deck(&start, code).unwrap();
             let input = &deck.files[0].1;
@@ -880,6 +873,11 @@ mod tests {
             let (_, g, _) = rolling_sds(&classes, 2, (0, 4), 1.0, 0.005, 0.5);
             assert!((g - gamma).abs() < 1e-12);
             assert!(input.contains(&format!("rolling sds {} {} {}", num(k), num(g), num(m))));
+            // settle_factor = 10 on GRC07's 5e-8 F0 a per grain and 1e-4 F0/a: the switch only.
+            assert!(input.contains(
+                "variable rest1 equal (c_eks1/200<5e-7)*(abs(c_pvir[1]-1e-2)<1e-3)*(abs(c_pvir[2]-1e-2)<1e-3)"
+            ));
+            assert!(input.contains("(v_kpg<5e-8)"));
         }
     }
 }

@@ -8,7 +8,9 @@
 //!   `patom1 patom2` (`compute property/local`) and `dist fx fy fz p1 p2 p3`
 //!   (`compute pair/local … cutoff radius` of `pair_style granular`), whatever their names.
 //!   Adhesive decks (`hybrid/overlay granular lepton/sphere`) dump every pair within the
-//!   cut-off; rows whose six force columns are all zero (no interaction) are dropped.
+//!   cut-off; rows whose normal force columns are all zero (no interaction) are dropped (with
+//!   `rolling sds`, LAMMPS 2025 leaves the tangential columns of such a row at the previous
+//!   row's values).
 //!   `fx fy fz` is the normal force on atom 1 (along x1 − x2, its sign the repulsive one), `p1 p2 p3`
 //!   the tangential force on atom 1;
 //! * `final.status`: one word (`equilibrium`, `time-limit`), optional.
@@ -35,8 +37,9 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
         ));
     }
     for r in &pairs.rows {
-        // Adhesive decks dump every pair within the cut-off: keep those that carry a force.
-        if meta.cohesive && r[3..9].iter().all(|&x| x == 0.0) {
+        // Adhesive decks dump every pair within the cut-off: keep those that carry a normal
+        // force (a pair out of range has none; its tangential columns may be stale).
+        if meta.cohesive && r[3..6].iter().all(|&x| x == 0.0) {
             continue;
         }
         let atom = |k: usize| {
@@ -68,4 +71,56 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
         });
     }
     Ok(raw)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn meta() -> Meta {
+        Meta {
+            scene: "t".into(),
+            code: "lammps-2025".into(),
+            dimension: 2,
+            pressure_target: Some(0.01),
+            cohesive: true,
+            mu: Some(0.5),
+            force_unit: "F0".into(),
+            n: 3,
+            data: Default::default(),
+        }
+    }
+
+    /// An adhesive deck's dump lists every pair within the cut-off. Row 2 (ids 1 and 3, 1.5 a
+    /// apart) carries no force, but its tangential columns repeat row 1's, as LAMMPS 2025 writes
+    /// them with `rolling sds`: it is dropped, and the real contact keeps its forces.
+    #[test]
+    fn out_of_range_pairs_are_dropped_even_with_stale_tangential_columns() {
+        let dir = tempfile::tempdir().unwrap();
+        let box_ = "ITEM: BOX BOUNDS pp pp pp\n0 10\n0 10\n-0.5 0.5\n";
+        std::fs::write(
+            dir.path().join("final.atoms"),
+            format!(
+                "ITEM: TIMESTEP\n9\nITEM: NUMBER OF ATOMS\n3\n{box_}ITEM: ATOMS id radius mass x y z\n\
+                 1 0.5 1 2 5 0\n2 0.5 1 2.999 5 0\n3 0.5 1 3.5 5 0\n"
+            ),
+        )
+        .unwrap();
+        std::fs::write(
+            dir.path().join("final.contacts"),
+            format!(
+                "ITEM: TIMESTEP\n9\nITEM: NUMBER OF ENTRIES\n2\n{box_}ITEM: ENTRIES c_prl[1] c_prl[2] c_pl[1] c_pl[2] c_pl[3] c_pl[4] c_pl[5] c_pl[6] c_pl[7]\n\
+                 1 2 0.999 0.9 0 0 0 0.02 0\n\
+                 1 3 1.5 -0 0 -0 0 0.02 0\n"
+            ),
+        )
+        .unwrap();
+        let raw = read_dir(dir.path(), &meta()).unwrap();
+        assert_eq!(raw.contacts.len(), 1);
+        let c = &raw.contacts[0];
+        assert_eq!((c.i, c.j), (0, 1));
+        // Force on atom 1 along +x, toward atom 2: attraction (N < 0).
+        assert!((c.normal + 0.9).abs() < 1e-12, "{}", c.normal);
+        assert!((c.tangential[1] + 0.02).abs() < 1e-12, "{:?}", c.tangential);
+    }
 }
