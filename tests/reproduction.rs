@@ -190,7 +190,10 @@ fn settle_factor_lets_a_soft_rr_packing_reach_equilibrium() {
     );
     assert!(r["delta_phi"].as_f64().unwrap().abs() < 1e-4, "{r}");
     // Well before the 3000 T0 limit (seeds 1–9: 117–145 T0).
-    assert!(summary["steps"][0]["time"].as_f64().unwrap() < 300.0, "{summary}");
+    assert!(
+        summary["steps"][0]["time"].as_f64().unwrap() < 300.0,
+        "{summary}"
+    );
 }
 
 /// Every golden record that carries the scene it ran (`settings`, written by `reproduce
