@@ -154,14 +154,22 @@ fn grc07_cohesive_rr_ci_equilibrates_in_its_bands() {
     let summary = check_ci_scene("grc07-type1-phi036-mu05-rr-ci");
     // GRC07 §II.D: at equilibrium the Coulomb and rolling inequalities are strict everywhere.
     assert_eq!(summary["contacts_at_threshold"], 0, "{summary}");
-    // The relaxation stopped a vibration; it did not build the structure.
+    assert_relaxation_kept_the_structure(&summary, 1e-5);
+}
+
+/// The relaxation of the first stage stopped a vibration; it did not build the structure: no
+/// pair gained or lost, |ΔΦ| below `max_delta_phi`.
+fn assert_relaxation_kept_the_structure(summary: &Value, max_delta_phi: f64) {
     let r = &summary["steps"][0]["relaxation"];
     assert_eq!(
         (&r["pairs_gained"], &r["pairs_lost"]),
         (&0.into(), &0.into()),
         "{r}"
     );
-    assert!(r["delta_phi"].as_f64().unwrap().abs() < 1e-5, "{r}");
+    assert!(
+        r["delta_phi"].as_f64().unwrap().abs() < max_delta_phi,
+        "{r}"
+    );
 }
 
 /// A soft (κ = 1e4) cohesive RR packing whose undamped rolling modes keep the kinetic energy
@@ -182,13 +190,7 @@ fn settle_factor_lets_a_soft_rr_packing_reach_equilibrium() {
         serde_json::from_slice(&std::fs::read(dir.path().join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "equilibrium", "{summary}");
     assert_eq!(summary["contacts_at_threshold"], 0, "{summary}");
-    let r = &summary["steps"][0]["relaxation"];
-    assert_eq!(
-        (&r["pairs_gained"], &r["pairs_lost"]),
-        (&0.into(), &0.into()),
-        "{r}"
-    );
-    assert!(r["delta_phi"].as_f64().unwrap().abs() < 1e-4, "{r}");
+    assert_relaxation_kept_the_structure(&summary, 1e-4);
     // Well before the 3000 T0 limit (seeds 1–9: 117–145 T0).
     assert!(
         summary["steps"][0]["time"].as_f64().unwrap() < 300.0,

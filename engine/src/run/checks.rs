@@ -93,8 +93,8 @@ pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
 
 /// What the relaxation's settling test sees at one check: the interaction list, and whether
 /// the assembly is at rest — the kinetic criterion and, under stress control, the stress
-/// criterion hold, to `factor` (`relax.settle_factor`; a gas at rest before a slow compression has an unchanged, empty list: it
-/// must not be taken for a settled packing). With `free_rollers` (GRC07 §III.A, no rolling
+/// criterion hold, to `factor` (`relax.settle_factor`; a gas at rest before a slow compression
+/// has an unchanged, empty list: it must not be taken for a settled packing). With `free_rollers` (GRC07 §III.A, no rolling
 /// resistance), grains with exactly one interaction roll freely on their partner: their pairs
 /// and their kinetic energy are left out (the energy per grain still divided by all N, as in
 /// the criterion).
