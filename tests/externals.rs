@@ -56,6 +56,23 @@ fn cohesive_classes_smoke_scene_agrees_with_lammps_2021() {
     );
 }
 
+/// Cohesive smoke with rolling resistance (issue 14): `xcode-cohesive-rr-smoke`, the classes
+/// scene with K_r and μ_r (`rolling sds` per pair of classes in LAMMPS, its moment ours to 7e-5 in
+/// comparisons/tests/lammps_two_particle.rs), run by all three with LAMMPS's stress control
+/// (the first-order servo, `numerics.servo_gain`) and velocities (`affine_velocity = false`):
+/// with AR07 (7)'s cell mass ours ended 3–6 band units denser in z. Same checks and bands
+/// (golden/xcode-bands.toml); LAMMPS 2021 runs it in ~1 min. (2025: golden/xcode-cohesive-rr-smoke/.)
+#[test]
+fn cohesive_rr_smoke_scene_agrees_with_lammps_2021() {
+    agree(
+        "xcode-cohesive-rr-smoke",
+        "rust,lammps",
+        0.01,
+        1e-4,
+        &["phi", "z_star", "z", "x0", "z_plus", "z_minus"],
+    );
+}
+
 /// SJKR cohesive smoke (issue 14): `xcode-sjkr-smoke`, 3D frictionless Hertz spheres with
 /// LIGGGHTS's own cohesion law (`cohesion sjkr`, attraction k·πa² in contact; ours is
 /// engine/src/contact/sjkr.rs, equal to LIGGGHTS's force to 1e-15 in

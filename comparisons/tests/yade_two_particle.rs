@@ -118,6 +118,7 @@ fn setup() -> Setup {
             check_every: STEPS,
             relax: None,
             window: 0.0,
+            servo_gain: None,
         }],
     };
     Setup { start }

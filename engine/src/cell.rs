@@ -9,7 +9,15 @@ pub enum Control<D: Dim> {
     /// Fixed volume and shape.
     Fixed,
     /// Prescribed diagonal stresses Σ_α (compressive positive), with |L̇_α/L_α| capped.
-    Stress { target: D::V, rate_cap: f64 },
+    /// `servo: None`: AR07 (7), the cell has a mass. `Some(g)`: first-order servo with no
+    /// cell mass, ε̇_α = g·(σ_αα − Σ_α)/Σ_α on the contact stress (the LAMMPS adhesive decks'
+    /// deform/pressure; `numerics.servo_gain`).
+    Stress {
+        target: D::V,
+        rate_cap: f64,
+        #[serde(default)]
+        servo: Option<f64>,
+    },
 }
 
 /// The periodic cell `[0, L_1) × … × [0, L_d)`; positions are stored reduced, r = L·s.
@@ -23,6 +31,15 @@ pub struct Cell<D: Dim> {
     /// Generalized mass M of AR07 (7).
     pub mass: f64,
     pub control: Control<D>,
+    /// Whether grain and contact velocities see the cell's strain rate (AR07 (6): u̇ = F/m +
+    /// ε̇·u, contact velocity Δu + ε̇·r). `false` is LAMMPS's `remap x`: positions follow
+    /// the cell, velocities do not (`numerics.affine_velocity`).
+    #[serde(default = "yes")]
+    pub affine_velocity: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl<D: Dim> Cell<D> {
@@ -32,6 +49,7 @@ impl<D: Dim> Cell<D> {
             ldot: D::V::zero(),
             mass,
             control: Control::Fixed,
+            affine_velocity: true,
         }
     }
 
@@ -47,13 +65,40 @@ impl<D: Dim> Cell<D> {
         D::div(self.ldot, self.l)
     }
 
+    /// The strain rate as the grain and contact velocities see it: ε̇, or zero without
+    /// [`Cell::affine_velocity`].
+    #[inline]
+    pub fn velocity_strain_rate(&self) -> D::V {
+        if self.affine_velocity {
+            self.strain_rate()
+        } else {
+            D::V::zero()
+        }
+    }
+
     /// Kick of the cell rates by AR07 (7): M L̈_α = (Ω/L_α)(σ_αα − Σ_α), then the cap on
-    /// the strain rate. `stress` is the measured stress (AR07 (8)). Called once per step with
-    /// the full `dt` (leapfrog: the stored rates are half-step rates).
-    pub fn kick(&mut self, stress: &Tensor, dt: f64) {
+    /// the strain rate. `stress` is the measured stress (AR07 (8)), `contact` its contact
+    /// part (what the servo reads, as LAMMPS's virial). Called once per step with the full
+    /// `dt` (leapfrog: the stored rates are half-step rates).
+    pub fn kick(&mut self, stress: &Tensor, contact: &Tensor, dt: f64) {
         match self.control {
             Control::Fixed => self.ldot = D::V::zero(),
-            Control::Stress { target, rate_cap } => {
+            Control::Stress {
+                target,
+                rate_cap,
+                servo: Some(g),
+            } => {
+                for a in 0..D::D {
+                    let rate =
+                        (g * (contact[a][a] - target[a]) / target[a]).clamp(-rate_cap, rate_cap);
+                    self.ldot[a] = rate * self.l[a];
+                }
+            }
+            Control::Stress {
+                target,
+                rate_cap,
+                servo: None,
+            } => {
                 let omega = self.volume();
                 for a in 0..D::D {
                     let acc = omega / (self.mass * self.l[a]) * (stress[a][a] - target[a]);
@@ -69,5 +114,55 @@ impl<D: Dim> Cell<D> {
         if let Control::Stress { .. } = self.control {
             self.l += self.ldot * dt;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::D2;
+    use nalgebra::Vector2;
+
+    fn stressed(servo: Option<f64>) -> Cell<D2> {
+        let mut c = Cell::<D2>::new(Vector2::new(10.0, 20.0), 1.0);
+        c.control = Control::Stress {
+            target: Vector2::new(0.01, 0.01),
+            rate_cap: 2e-3,
+            servo,
+        };
+        c
+    }
+
+    /// The servo's rate is g·(σ_αα − P)/P on the contact stress, at most the cap, whatever
+    /// the rate before (no cell mass); AR07 (7) instead accelerates the cell from its rate.
+    #[test]
+    fn servo_sets_the_rate_from_the_contact_stress_and_caps_it() {
+        let mut total = [[0.0; 3]; 3];
+        total[0][0] = 1.0;
+        total[1][1] = 1.0;
+        let mut contact = [[0.0; 3]; 3];
+        contact[0][0] = 0.011; // 10 % above P: rate 0.1 g, expansion
+        contact[1][1] = 0.0; // far below: the cap, contraction
+        let mut c = stressed(Some(0.004));
+        c.ldot = Vector2::new(5.0, 5.0);
+        c.kick(&total, &contact, 0.1);
+        assert!((c.strain_rate()[0] - 0.1 * 0.004).abs() < 1e-15);
+        assert_eq!(c.strain_rate()[1], -2e-3);
+        // Without the servo, the same contact stress and total stress 1.0 drive it by AR07 (7).
+        let mut m = stressed(None);
+        m.kick(&total, &contact, 0.1);
+        assert_eq!(m.strain_rate()[0], 2e-3);
+    }
+
+    /// `affine_velocity = false` (LAMMPS `remap x`): the cell still deforms, the velocities
+    /// see no strain rate.
+    #[test]
+    fn remap_without_affine_velocity_hides_the_strain_rate_from_velocities() {
+        let mut c = stressed(None);
+        c.ldot = Vector2::new(0.01, -0.04);
+        assert_eq!(c.velocity_strain_rate(), c.strain_rate());
+        c.affine_velocity = false;
+        assert_eq!(c.velocity_strain_rate(), Vector2::zeros());
+        assert_eq!(c.strain_rate(), Vector2::new(0.01 / 10.0, -0.04 / 20.0));
     }
 }

@@ -203,8 +203,8 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         }
         self.compute_forces(dt);
         self.accumulate(0.5 * dt);
-        let stress = self.stress();
-        self.cell.kick(&stress, dt);
+        let (stress, contact) = (self.stress(), self.contact_stress());
+        self.cell.kick(&stress, &contact, dt);
         self.time += dt;
         self.step += 1;
     }
@@ -215,7 +215,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     pub fn kick_drift(&mut self) {
         let dt = self.dt;
         let h = 0.5 * dt;
-        let erate = self.cell.strain_rate();
+        let erate = self.cell.velocity_strain_rate();
         let inv_l = D::div(ones::<D>(), self.cell.l);
         let maxd = {
             let force = &self.force;
@@ -366,7 +366,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// The net forces on the grains are summed by [`Self::accumulate`].
     pub fn compute_forces(&mut self, dt: f64) {
         let n = self.len();
-        let erate = self.cell.strain_rate();
+        let erate = self.cell.velocity_strain_rate();
         let range = self.law.range();
         let nchunks = n.div_ceil(ROW_CHUNK);
         // Move the per-pair arrays out so the chunks can borrow them while `self` is shared.
@@ -474,7 +474,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// Gathers the pair forces on each grain in a fixed order, then the closing half kick
     /// of length `h` (0: forces and kinetic virial only).
     pub fn accumulate(&mut self, h: f64) {
-        let erate = self.cell.strain_rate();
+        let erate = self.cell.velocity_strain_rate();
         let nl = &self.nlist;
         let pf = &self.pair_force;
         let pc = &self.pair_cross;
@@ -582,7 +582,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// Every interacting pair with its forces, evaluated on the current state without
     /// advancing any history.
     pub fn interactions(&self) -> Vec<Interaction<D>> {
-        let erate = self.cell.strain_rate();
+        let erate = self.cell.velocity_strain_rate();
         let mut out = Vec::new();
         for i in 0..self.len() {
             for p in self.nlist.row(i) {

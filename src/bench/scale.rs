@@ -177,6 +177,7 @@ pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
     cell.control = Control::Stress {
         target,
         rate_cap: 1e-3,
+        servo: None,
     };
     let law = hertz_mindlin_law(&scene.law, Coulomb { mu: 0.3 });
     let mut sys = System::new(law, cell, s, &vec![1.0; n], scene.numerics.skin);

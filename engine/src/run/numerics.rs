@@ -49,6 +49,8 @@ pub struct StageNumerics {
     /// resistance), for the snapshot and the contacts at a threshold.
     pub mu: Mu,
     pub mu_r: f64,
+    /// `numerics.servo_gain`: stress control by the first-order servo, not AR07 (7).
+    pub servo_gain: Option<f64>,
 }
 
 impl StageNumerics {
@@ -83,6 +85,7 @@ impl StageNumerics {
                 } => r.mu_r,
                 _ => f64::INFINITY,
             },
+            servo_gain: n.servo_gain,
         }
     }
 

@@ -137,7 +137,8 @@ pub fn system_of<D: Dim, L: ContactLaw<D>>(
 ) -> Result<System<D, L>, String> {
     let total_mass: f64 = grains.diameter.iter().map(|d| d.powi(D::D as i32)).sum();
     let cell_mass = cell_mass(&scene.numerics, total_mass, D::product(grains.l), D::D);
-    let cell = Cell::new(grains.l, cell_mass);
+    let mut cell = Cell::new(grains.l, cell_mass);
+    cell.affine_velocity = scene.numerics.affine_velocity;
     let mut sys = System::new(
         law,
         cell,

@@ -288,6 +288,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 sys.cell.control = Control::Stress {
                     target,
                     rate_cap: inertia_cap / time_unit,
+                    servo: num.servo_gain,
                 };
             }
             _ => {

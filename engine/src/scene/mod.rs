@@ -251,6 +251,17 @@ pub struct Numerics {
     /// with 2D stresses (force per length) in GRC07 (3), M ε̈ = σ^I − σ^M, M is a mass, and
     /// the 42–70 × lighter cell this gives makes z miss T.III by 5–10 % (README, GRC07).
     pub cell_mass_per_length: bool,
+    /// Stress control by a first-order servo with no cell mass instead of AR07 (7): each
+    /// axis' strain rate is g·(σ_αα − P)/P on the contact stress, at most the stage's cap
+    /// (`cell_mass` unused). The LAMMPS adhesive decks' control (deform/pressure in 2025, a
+    /// fix deform servo in 2021), which then use this g. Needs P > 0 in every `compress`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub servo_gain: Option<f64>,
+    /// Grain and contact velocities see the cell's strain rate (AR07 (6): u̇ = F/m + ε̇·u,
+    /// contact velocity Δu + ε̇·r, so the normal dashpot resists the affine compression).
+    /// `false` is LAMMPS's (and LIGGGHTS's) `remap x`: positions follow the cell,
+    /// velocities do not. Without it our engine's servo loop goes unstable (README).
+    pub affine_velocity: bool,
     /// Steps between equilibrium checks and progress reports.
     pub check_every: u64,
     /// The run stops as unstable when an overlap exceeds this fraction of the smaller radius.
@@ -265,6 +276,8 @@ impl Default for Numerics {
             skin: 0.05,
             cell_mass: 1.0,
             cell_mass_per_length: false,
+            servo_gain: None,
+            affine_velocity: true,
             check_every: 200,
             max_overlap: 0.1,
         }

@@ -278,6 +278,22 @@ impl Scene {
         positive("numerics.stiffness_force", n.stiffness_force)?;
         in_range("numerics.skin", n.skin, 1e-4, 1.0)?;
         positive("numerics.cell_mass", n.cell_mass)?;
+        if let Some(g) = n.servo_gain {
+            in_range("numerics.servo_gain", g, 1e-12, 1e3)?;
+            if let Some(k) = self
+                .protocol
+                .iter()
+                .position(|s| matches!(s, Step::Compress { pressure, .. } if *pressure <= 0.0))
+            {
+                return Err(err(
+                    "numerics.servo_gain",
+                    format!(
+                        "the servo's rate g·(σ − P)/P needs P > 0, but protocol step {} compresses to P = 0: remove servo_gain (the cell-mass control of AR07 (7) takes P = 0)",
+                        k + 1
+                    ),
+                ));
+            }
+        }
         if n.check_every == 0 {
             return Err(err("numerics.check_every", "must be ≥ 1".into()));
         }
@@ -613,5 +629,18 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    /// The servo reads (σ − P)/P: a gain is checked, and P = 0 is refused with the step named.
+    #[test]
+    fn servo_gain_needs_a_positive_pressure() {
+        let servo = BASE.replace("[numerics]", "[numerics]\nservo_gain = 0.002");
+        let s = Scene::from_toml(&servo, Path::new("s.toml")).unwrap();
+        assert_eq!(s.numerics.servo_gain, Some(0.002));
+        let e = err(&BASE.replace("[numerics]", "[numerics]\nservo_gain = -1.0"));
+        assert_eq!(e.field, "numerics.servo_gain", "{e}");
+        let e = err(&servo.replace("pressure = 0.01", "pressure = 0.0"));
+        assert_eq!(e.field, "numerics.servo_gain", "{e}");
+        assert!(e.message.contains("protocol step 1"), "{e}");
     }
 }

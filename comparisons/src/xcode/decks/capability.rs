@@ -81,6 +81,15 @@ pub enum Feature {
     Polydisperse,
     /// Stress-controlled periodic cell with a strain-rate cap (AR07 (6)–(8), (23); GRC08 I_a).
     StressControl,
+    /// Stress control by the scene's first-order servo with no cell mass (`numerics.servo_gain`:
+    /// ε̇_α = g·(σ_αα − P)/P, at most the cap) instead of AR07 (7).
+    StressServo,
+    /// Grain and contact velocities see the cell's strain rate (AR07 (6): the dashpot and the
+    /// tangential spring see Δu + ε̇·r).
+    AffineVelocity,
+    /// Positions follow the cell, velocities do not (`numerics.affine_velocity = false`,
+    /// LAMMPS's `remap x`).
+    RemapPositionsOnly,
     /// Fixed periodic cell.
     FixedCell,
     /// Stop when all grains form one cluster (GRC07 method 2).
@@ -100,7 +109,7 @@ pub enum Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 26] = [
+    pub const ALL: [Feature; 29] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -119,6 +128,9 @@ impl Feature {
         Feature::Disks,
         Feature::Polydisperse,
         Feature::StressControl,
+        Feature::StressServo,
+        Feature::AffineVelocity,
+        Feature::RemapPositionsOnly,
         Feature::FixedCell,
         Feature::OneClusterStop,
         Feature::MultiStage,
@@ -149,6 +161,9 @@ impl Feature {
             Feature::Disks => "disks-2d",
             Feature::Polydisperse => "polydisperse",
             Feature::StressControl => "stress-control",
+            Feature::StressServo => "stress-servo",
+            Feature::AffineVelocity => "affine-velocity",
+            Feature::RemapPositionsOnly => "remap-positions-only",
             Feature::FixedCell => "fixed-cell",
             Feature::OneClusterStop => "one-cluster-stop",
             Feature::MultiStage => "multi-stage",
@@ -180,6 +195,15 @@ impl Feature {
             Feature::Disks => "2D disks",
             Feature::Polydisperse => "diameters uniform in [d_min a, a]",
             Feature::StressControl => "isotropic stress control with a strain-rate cap",
+            Feature::StressServo => {
+                "stress control by a first-order servo g·(σ − P)/P, no cell mass (`numerics.servo_gain`)"
+            }
+            Feature::AffineVelocity => {
+                "contact velocities include the affine strain rate ε̇·r (AR07 (6))"
+            }
+            Feature::RemapPositionsOnly => {
+                "the cell moves positions, not velocities (`numerics.affine_velocity = false`)"
+            }
             Feature::FixedCell => "fixed periodic cell",
             Feature::OneClusterStop => "stop when all grains form one cluster (GRC07 method 2)",
             Feature::MultiStage => "several DEM stages (pressure or κ programs)",
@@ -257,7 +281,17 @@ pub fn features(start: &Start) -> Vec<Feature> {
     }
     let kinds = |pred: &dyn Fn(&StageKind) -> bool| start.stages.iter().any(|s| pred(&s.kind));
     if kinds(&|k| matches!(k, StageKind::Compress { .. })) {
-        f.push(Feature::StressControl);
+        let n = &start.scene.numerics;
+        f.push(if n.servo_gain.is_some() {
+            Feature::StressServo
+        } else {
+            Feature::StressControl
+        });
+        f.push(if n.affine_velocity {
+            Feature::AffineVelocity
+        } else {
+            Feature::RemapPositionsOnly
+        });
     }
     if kinds(&|k| matches!(k, StageKind::FixedVolume { .. } | StageKind::Aggregate)) {
         f.push(Feature::FixedCell);
@@ -288,6 +322,8 @@ pub fn features(start: &Start) -> Vec<Feature> {
     f.dedup();
     f
 }
+
+const REMAP: &str = "the box change remaps positions (`remap x`), not velocities: the dashpot and the tangential spring see Δv without ε̇·r";
 
 const RELAX: &str =
     "the switch to background damping on a settled interaction list is not generated";
@@ -323,6 +359,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::RollingContinuousSizes => Unsupported("`rolling sds` takes K_r/R*² and μ_r/R* per pair of atom types: give the scene `particles.classes` (at most 16)"),
             F::TangentialDamping => Unsupported("tangential damping in `linear_history` is not generated"),
             F::StressControl => Approximate("fix press/berendsen aniso on the virial stress: each axis' strain rate is (P − σ_αα)/(3Bτ), at the cap only while σ_αα ≈ 0, no cell mass"),
+            F::AffineVelocity => Approximate(REMAP),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::FinalRelaxation => Approximate("switch tested at the end of each settle_time chunk on the contact count (compute contact/atom: touching pairs, not the interaction list) with the kinetic and stress criteria; damping by fix langevin at T = 0 (drag −γ m v exact, spins at LAMMPS's rotational rate); tangential dashpot inside the Coulomb cap; window checked by fix halt runs"),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
@@ -346,6 +383,8 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),
             F::Disks => Unsupported("2D decks not generated for LIGGGHTS"),
             F::StressControl => Approximate("no barostat fix: per-axis servo of fix deform, strain rate ∝ virial stress error (full cap beyond 50 % of the target), no cell mass"),
+            F::StressServo => Approximate("per-axis servo of fix deform with its own gain (full cap beyond 50 % of the target), not the scene's g"),
+            F::AffineVelocity => Approximate(REMAP),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::FinalRelaxation => Unsupported(RELAX),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
@@ -369,6 +408,8 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::TangentialDamping => Unsupported("no tangential damping option is generated"),
             F::Disks => Unsupported("2D disks (blockedDOFs emulation) not generated"),
             F::StressControl => Approximate("AR07 (7) cell dynamics and rate cap integrated by a script servo (PyRunner each step, O.cell.velGrad) on the contact stress only; PeriTriaxController hunted around 1.01–1.09 P"),
+            F::StressServo => Approximate("the script servo integrates AR07 (7) with a cell mass, not the scene's first-order servo"),
+            F::RemapPositionsOnly => Approximate("bodies carry the cell's velocity field (homoDeform): contact velocities include ε̇·r"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::FinalRelaxation => Unsupported(RELAX),
             F::HardGrainInterlude => Unsupported(INTERLUDE),

@@ -267,14 +267,25 @@ fn rolling_sds(
     (kr / (r_eff * r_eff), eta / (r_eff * r_eff), mu_r / r_eff)
 }
 
-/// Gain g of the adhesive decks' first-order servo, per-axis rate g·(σ_αα − P)/P: 2·cap (full
-/// cap beyond 50 % of the target), lowered to keep the loop stable. Each step the affine
+/// Gain g of the first-order servo, per-axis rate g·(σ_αα − P)/P: the scene's
+/// `numerics.servo_gain` where it sets one (our engine then runs the same servo); otherwise,
+/// in adhesive decks, 2·cap (full cap beyond 50 % of the target), lowered to keep the loop stable. Each step the affine
 /// remap changes the stress by B·rate·dt with B ≈ κ/4 (measured on the smoke packing: a step
 /// at the cap moved σ by 0.055 at κ = 1e4); g·B·dt/P > 2 makes the box flip between two
 /// sizes every step with σ ≈ P ± 0.028 (seen), so g ≤ P/(2 κ dt) (B taken as κ/4, 4× margin on the
 /// stability bound B·g·dt/P < 2).
 fn servo_gain(pressure: f64, st: &super::Stage) -> f64 {
-    (2.0 * st.max_strain_rate).min(pressure / (2.0 * st.kappa * st.dt))
+    st.servo_gain
+        .unwrap_or((2.0 * st.max_strain_rate).min(pressure / (2.0 * st.kappa * st.dt)))
+}
+
+/// How the deck's comment names g.
+fn servo_gain_source(st: &super::Stage) -> &'static str {
+    if st.servo_gain.is_some() {
+        "the scene's numerics.servo_gain"
+    } else {
+        "min(2 cap, P/(2 κ dt))"
+    }
 }
 
 /// LAMMPS 2021's stand-in for deform/pressure (which it lacks) in adhesive stage `k`: `fix
@@ -293,10 +304,11 @@ fn servo_2021(s: &mut String, start: &Start, st: &super::Stage, k: usize, pressu
         num(servo_gain(pressure, st)),
         num(st.max_strain_rate),
     );
+    let src = servo_gain_source(st);
     let _ = writeln!(
         s,
         "# Stress control (LAMMPS 2021 has no deform/pressure): fix deform sets each box length to\n\
-         # L(1 + r dt), r = g·(σ_αα − P)/P at most the cap {cap}, g = min(2 cap, P/(2 κ dt)) = {g}.\n\
+         # L(1 + r dt), r = g·(σ_αα − P)/P at most the cap {cap}, g = {src} = {g}.\n\
          fix avp{k} all ave/time 1 1 1 {}",
         cols.join(" ")
     );
@@ -517,9 +529,10 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         // Lines before each `run` of the stage (LAMMPS 2021 adhesive servo: the box at the run's start).
         let mut rebase = String::new();
         if let StageKind::Compress { pressure } = st.kind {
-            if start.cohesive() && code == Code::Lammps {
+            let servo = start.cohesive() || st.servo_gain.is_some();
+            if servo && code == Code::Lammps {
                 rebase = servo_2021(&mut s, start, st, k1, pressure);
-            } else if start.cohesive() {
+            } else if servo {
                 // An adhesive packing's virial swings to ±100 P while grains collide and
                 // stick: Berendsen's rate (P − σ)/(3Bτ) has no bound and collapses the cell.
                 // LAMMPS 2025's deform/pressure caps it: per axis, rate = g(σ_αα − P)/P at
@@ -537,9 +550,10 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
                     .join(" ");
                 let _ = writeln!(
                     s,
-                    "# Stress control: fix deform/pressure, per-axis strain rate g·(σ_αα − P)/P, g = min(2 cap, P/(2 κ dt)), at most the cap\n\
+                    "# Stress control: fix deform/pressure, per-axis strain rate g·(σ_αα − P)/P, g = {}, at most the cap\n\
                      fix baro all deform/pressure 1 {axes} max/rate {} normalize/pressure yes remap x\n\
                      fix_modify baro press pvir",
+                    servo_gain_source(st),
                     num(st.max_strain_rate)
                 );
             } else {
@@ -878,6 +892,33 @@ mod tests {
                 "variable rest1 equal (c_eks1/200<5e-7)*(abs(c_pvir[1]-1e-2)<1e-3)*(abs(c_pvir[2]-1e-2)<1e-3)"
             ));
             assert!(input.contains("(v_kpg<5e-8)"));
+            // The scene's servo gain (numerics.servo_gain = 2.25e-3), not the decks' own: the
+            // stress control and the unremapped velocities are then ours, no deviation line.
+            let servo = match code {
+                Code::Lammps => "variable r1xraw equal 2.25e-3*(f_avp1[1]-1e-2)/1e-2",
+                _ => "fix baro all deform/pressure 1 x pressure 1e-2 2.25e-3 y pressure 1e-2 2.25e-3 max/rate 2e-3",
+            };
+            assert!(input.contains(servo), "{code}: no `{servo}`");
+            assert!(
+                !deck.deviations.iter().any(|d| d.starts_with("stress")
+                    || d.starts_with("affine-velocity")
+                    || d.starts_with("remap")),
+                "{code}: {:?}",
+                deck.deviations
+            );
         }
+    }
+
+    /// A frictional scene without the servo keeps Berendsen, and says that LAMMPS's velocities
+    /// do not see the affine strain rate.
+    #[test]
+    fn berendsen_decks_name_the_affine_velocity_deviation() {
+        let start = library_start("xcode-smoke");
+        let deck = super::super::deck(&start, Code::Lammps).unwrap();
+        assert!(deck.files[0].1.contains("press/berendsen"));
+        assert!(deck
+            .deviations
+            .iter()
+            .any(|d| d.starts_with("affine-velocity: the box change remaps positions")));
     }
 }

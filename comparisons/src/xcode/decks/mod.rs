@@ -46,6 +46,8 @@ pub struct Stage {
     pub relax: Option<Relax>,
     /// Time over which the criteria must hold before the stage ends (0: one check).
     pub window: f64,
+    /// The scene's first-order servo gain (`numerics.servo_gain`), if it sets one.
+    pub servo_gain: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -258,6 +260,7 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
             check_every: scene.numerics.check_every,
             relax: step.relax(),
             window: step.criteria().window,
+            servo_gain: scene.numerics.servo_gain,
         });
     }
     let n = grains.s.len();
@@ -314,7 +317,10 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
             missing,
         });
     }
-    let adhesive_lammps = start.cohesive() && matches!(code, Code::Lammps | Code::Lammps2025);
+    // LAMMPS decks with a servo (adhesive, or the scene's servo_gain) describe their stress
+    // control and box change as such.
+    let servo = start.cohesive() || start.scene.numerics.servo_gain.is_some();
+    let adhesive_lammps = servo && matches!(code, Code::Lammps | Code::Lammps2025);
     let deviations: Vec<String> = feats
         .iter()
         .filter_map(|f| match capability::support(code, *f) {
