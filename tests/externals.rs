@@ -89,13 +89,12 @@ fn sjkr_smoke_scene_agrees_with_liggghts() {
     );
 }
 
-/// DMT cohesive smoke (issue 14): `xcode-dmt-smoke`, the same assembly with YADE's own adhesion
-/// (`includeAdhesion`, a constant pull 4πR*γ in contact; ours is engine/src/contact/dmt.rs,
-/// equal to YADE's force to 6e-7 in comparisons/tests/yade_two_particle.rs) in our engine and
-/// YADE. Ignored by default: YADE needs 5–10 min for it here (the two-particle test of the law
-/// runs by default); `cargo test --release --test externals dmt -- --ignored`.
+/// DMT cohesive smoke (issue 14): `xcode-dmt-smoke`, 3D frictionless Hertz spheres with YADE's
+/// own adhesion (`includeAdhesion`, a constant pull 4πR*γ in contact; ours is
+/// engine/src/contact/dmt.rs, equal to YADE's force to 6e-7 in
+/// comparisons/tests/yade_two_particle.rs) in our engine and YADE, at κ = 1e3 and twice our
+/// default time step so that YADE runs it in ~1.5 min.
 #[test]
-#[ignore = "5–10 min of YADE; the law is checked by yade_two_particle"]
 fn dmt_smoke_scene_agrees_with_yade() {
     agree(
         "xcode-dmt-smoke",
