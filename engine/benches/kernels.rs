@@ -69,8 +69,8 @@ fn kernels(c: &mut Criterion) {
     group.bench_function("barostat", |b| {
         b.iter_custom(|iters| {
             timed(iters, &mut sys.clone(), &|s| {
-                let stress = s.stress();
-                s.cell.kick(&stress, dt);
+                let (stress, contact) = (s.stress(), s.contact_stress());
+                s.cell.kick(&stress, &contact, dt);
                 s.cell.drift(dt);
             })
         })
