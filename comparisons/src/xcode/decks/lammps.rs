@@ -269,11 +269,11 @@ fn rolling_sds(
 
 /// Gain g of the first-order servo, per-axis rate g·(σ_αα − P)/P: the scene's
 /// `numerics.servo_gain` where it sets one (our engine then runs the same servo); otherwise,
-/// in adhesive decks, 2·cap (full cap beyond 50 % of the target), lowered to keep the loop stable. Each step the affine
-/// remap changes the stress by B·rate·dt with B ≈ κ/4 (measured on the smoke packing: a step
-/// at the cap moved σ by 0.055 at κ = 1e4); g·B·dt/P > 2 makes the box flip between two
-/// sizes every step with σ ≈ P ± 0.028 (seen), so g ≤ P/(2 κ dt) (B taken as κ/4, 4× margin on the
-/// stability bound B·g·dt/P < 2).
+/// in adhesive decks, 2·cap (full cap beyond 50 % of the target), lowered to keep the loop
+/// stable. Each step the affine remap changes the stress by B·rate·dt with B ≈ κ/4 (measured
+/// on the smoke packing: a step at the cap moved σ by 0.055 at κ = 1e4); g·B·dt/P > 2 makes
+/// the box flip between two sizes every step with σ ≈ P ± 0.028 (seen), so g ≤ P/(2 κ dt) (B
+/// taken as κ/4, 4× margin on the stability bound B·g·dt/P < 2).
 fn servo_gain(pressure: f64, st: &super::Stage) -> f64 {
     st.servo_gain
         .unwrap_or((2.0 * st.max_strain_rate).min(pressure / (2.0 * st.kappa * st.dt)))
