@@ -176,7 +176,8 @@ impl Analysis {
     /// `phi`, `z`, `z_star`, `x0`, `xk1` (cohesive only), `xk2`…`xk12` (x_k, variant I), `xk2_II`…`xk12_II`,
     /// `mean_N`, `Z2`, `Z5_3`, `X1`, `M1`, `M2`, `N_2`, `X1_2`, `M1_2`, `M2_2`, `N_3`, `X1_3`,
     /// `M1_3`, `M2_3`, `Q4`, `Q6`, `Q4loc`, `Q6loc`, `Z_bond`, `Z_cr`, `Q6loc_cr`, `x_cr`,
-    /// `n_cr`, `z_plus`, `z_minus`, `z_zero`, `clusters`, `pressure` (measured).
+    /// `n_cr`, `z_plus`, `z_minus`, `z_zero`, `clusters`, `N_plus`, `N_plus_rms`, `N_minus`,
+    /// `N_minus_rms` (GRC07 T.VI, units of F0), `pressure` (measured).
     pub fn metric_values(&self) -> Vec<(String, f64)> {
         let mut v: Vec<(String, f64)> = Vec::new();
         let mut put = |k: &str, x: Option<f64>| {
@@ -236,6 +237,10 @@ impl Analysis {
             put("z_minus", Some(s.z_minus));
             put("z_zero", Some(s.z_zero));
             put("clusters", Some(s.clusters as f64));
+            put("N_plus", s.mean_repulsive);
+            put("N_plus_rms", s.rms_repulsive);
+            put("N_minus", s.mean_attractive);
+            put("N_minus_rms", s.rms_attractive);
         }
         put("pressure", self.pressure.measured);
         v

@@ -230,6 +230,12 @@ fn cohesive_split() {
     assert_eq!(s.mean_repulsive, Some(0.5));
     assert_close!(s.mean_attractive.unwrap(), 0.4, 1e-15);
     assert_close!(s.rms_attractive.unwrap(), (0.17f64).sqrt(), 1e-15);
+    // GRC07 T.VI's N±, N±^(2) in the metric table (F0 = 1).
+    let v = a.metric_values();
+    assert_eq!(value(&v, "N_plus"), Some(0.5));
+    assert_eq!(value(&v, "N_plus_rms"), Some(0.5));
+    assert_close!(value(&v, "N_minus").unwrap(), 0.4, 1e-15);
+    assert_close!(value(&v, "N_minus_rms").unwrap(), (0.17f64).sqrt(), 1e-15);
     assert_close!(a.x_k[1], 2.0 / 8.0, 1e-15);
     assert_close!(a.x_k[2], 5.0 / 8.0, 1e-15);
     assert!(a.forces.z5_3.is_none(), "negative forces");
@@ -408,7 +414,8 @@ fn canonical_keys() -> Vec<String> {
         [
             "mean_N", "Z2", "Z5_3", "X1", "M1", "M2", "N_2", "X1_2", "M1_2", "M2_2", "N_3", "X1_3",
             "M1_3", "M2_3", "Q4", "Q6", "Q4loc", "Q6loc", "Z_bond", "Z_cr", "Q6loc_cr", "x_cr",
-            "n_cr", "z_plus", "z_minus", "z_zero", "clusters", "pressure",
+            "n_cr", "z_plus", "z_minus", "z_zero", "clusters", "N_plus", "N_plus_rms", "N_minus",
+            "N_minus_rms", "pressure",
         ]
         .map(String::from),
     );
