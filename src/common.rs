@@ -25,6 +25,9 @@ pub fn install_stop_handler() {
 
 /// Sizes the global rayon pool (default: all cores).
 pub fn set_threads(threads: Option<usize>) -> Result<()> {
+    if threads == Some(0) {
+        bail!("-j 0: give a thread count ≥ 1, or omit -j to use every core");
+    }
     if let Some(t) = threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)

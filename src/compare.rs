@@ -146,6 +146,8 @@ fn run_rust(
         quiet,
         report: false,
         resume: false,
+        // A harness scratch directory: a leftover checkpoint is not a run to keep.
+        force: true,
         checkpoint_every: 60.0,
     };
     r.version = Some(format!("grainbench {}", env!("CARGO_PKG_VERSION")));

@@ -54,6 +54,10 @@ enum Command {
         /// result is bit-identical to an uninterrupted run.
         #[arg(long)]
         resume: bool,
+        /// Start over even if the output directory holds the checkpoint of an unfinished run
+        /// (which is then deleted); without it such a run is refused.
+        #[arg(long, conflicts_with = "resume")]
+        force: bool,
         /// Seconds of wall time between checkpoints (`<out>/checkpoint.bin`); 0 = at every
         /// check. The checkpoint is removed when the run completes.
         #[arg(long, default_value_t = 60.0, value_name = "SECS")]
@@ -263,6 +267,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             quiet,
             require_equilibrium,
             resume,
+            force,
             checkpoint_every,
             seed,
         } => {
@@ -271,6 +276,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 quiet,
                 report: true,
                 resume,
+                force,
                 checkpoint_every,
             };
             run::run_command(scene.as_deref(), out, seed, require_equilibrium, &flags)
@@ -306,6 +312,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                     quiet,
                     report: true,
                     resume: false,
+                    force: false,
                     checkpoint_every,
                 },
             })

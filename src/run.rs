@@ -18,11 +18,16 @@ pub struct RunFlags {
     /// Print the metrics table of the final state.
     pub report: bool,
     pub resume: bool,
+    /// Start over even if the output directory holds the checkpoint of an unfinished run.
+    pub force: bool,
     pub checkpoint_every: f64,
 }
 
 /// The checkpoint file of a run, in its output directory.
 pub const CHECKPOINT: &str = "checkpoint.bin";
+
+/// The lock file of a run, in its output directory (one of the scene's reserved names).
+pub const LOCK: &str = ".grainbench.lock";
 
 /// `grainbench run`: exit status 3 with `require_equilibrium` unless every step ended at
 /// equilibrium.
@@ -35,6 +40,13 @@ pub fn run_command(
 ) -> Result<i32> {
     let (mut scene, out) = scene_and_out(spec, out, flags.resume)?;
     if let Some(s) = seed {
+        if flags.resume && spec.is_none() && scene.seed != s {
+            bail!(
+                "--resume continues the run in {} started with seed {}; --seed {s} cannot change it: drop --seed, or start a new run without --resume",
+                out.display(),
+                scene.seed
+            );
+        }
         scene.seed = s;
     }
     let (code, outcome) = run(&scene, &out, flags)?;
@@ -73,6 +85,26 @@ fn scene_and_out(
 pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outcome>)> {
     let quiet = flags.quiet;
     let cp_path = out.join(CHECKPOINT);
+    if !(flags.checkpoint_every.is_finite() && flags.checkpoint_every >= 0.0) {
+        bail!("--checkpoint-every must be a number of seconds ≥ 0");
+    }
+    if out.exists() && !out.is_dir() {
+        bail!(
+            "--out {}: is a file, not a directory; give a directory (it is created if missing)",
+            out.display()
+        );
+    }
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("creating the output directory {}", out.display()))?;
+    // Held until the run returns; also proves the directory writable before any work.
+    let _lock = lock_output(out)?;
+    if !flags.resume && !flags.force && cp_path.exists() {
+        bail!(
+            "{} holds the checkpoint of an unfinished run ({}): continue it with --resume, or start over with --force (which deletes it)",
+            out.display(),
+            cp_path.display()
+        );
+    }
     let resume = if flags.resume {
         let cp = Checkpoint::read(&cp_path).map_err(|e| {
             anyhow::anyhow!("{e}\n(--resume continues a run from {}; there is nothing to resume without it: run without --resume)", cp_path.display())
@@ -89,11 +121,6 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
     } else {
         None
     };
-    if !(flags.checkpoint_every.is_finite() && flags.checkpoint_every >= 0.0) {
-        bail!("--checkpoint-every must be a number of seconds ≥ 0");
-    }
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("creating the output directory {}", out.display()))?;
     install_stop_handler();
     let stop = &STOP;
     eprintln!(
@@ -320,4 +347,36 @@ fn pressure_text(c: &Checks) -> String {
     } else {
         format!("P={:.3e}", c.pressure)
     }
+}
+
+/// Takes the advisory lock of an output directory (`flock` on [`LOCK`], released when the
+/// file is dropped or the process ends), so two runs never write over each other's checkpoint.
+fn lock_output(out: &Path) -> Result<std::fs::File> {
+    use std::io::{Read, Seek, Write};
+    use std::os::unix::io::AsRawFd;
+    let path = out.join(LOCK);
+    let mut f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .with_context(|| format!("cannot write in the output directory {}", out.display()))?;
+    // SAFETY: flock on a descriptor this function owns.
+    if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+        let mut other = String::new();
+        let _ = f.read_to_string(&mut other);
+        let other = match other.trim() {
+            "" => "pid unknown".to_string(),
+            o => o.to_string(),
+        };
+        bail!(
+            "another grainbench run ({other}) is writing to {}: wait for it to end, or give this run another --out",
+            out.display()
+        );
+    }
+    f.set_len(0)?;
+    f.rewind()?;
+    write!(f, "pid {}", std::process::id())?;
+    Ok(f)
 }

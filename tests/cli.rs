@@ -540,3 +540,226 @@ fn every_stage_kind_runs_in_order() {
     assert_eq!(snap["mu"], 0.5);
     assert_eq!(snap["pressure_target"], 4.0);
 }
+
+/// Issue 18: inputs that used to panic (exit 101) or hang now end with a clear error.
+#[test]
+fn hostile_scene_inputs_neither_panic_nor_hang() {
+    let dir = tempfile::tempdir().unwrap();
+    // `pressure = 1e20` blew the cell up and panicked in `f64::clamp` (engine/src/cell.rs).
+    let crush = scene_file(
+        dir.path(),
+        "crush.toml",
+        &SMALL_3D.replace("pressure = 1.0", "pressure = 1e20"),
+    );
+    let out = grainbench()
+        .arg("run")
+        .arg(&crush)
+        .args(["-q", "-o"])
+        .arg(dir.path().join("crush"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(4), "{err}");
+    assert!(
+        !err.contains("panicked") && err.contains("unstable"),
+        "{err}"
+    );
+
+    // `count = 8`: the cell shrank below twice the reach while compressing, exit 0.
+    let eight = scene_file(
+        dir.path(),
+        "eight.toml",
+        &SMALL_3D.replace("count = 250", "count = 8"),
+    );
+    grainbench()
+        .arg("run")
+        .arg(&eight)
+        .args(["-q", "-o"])
+        .arg(dir.path().join("eight"))
+        .assert()
+        .code(4)
+        .stderr(predicate::str::contains("cell shrank"))
+        .stderr(predicate::str::contains("two periodic images"));
+
+    // `-j 0` silently meant every core.
+    grainbench()
+        .args(["run", "-j", "0"])
+        .arg(&eight)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("-j 0"));
+
+    // `--resume --seed 6` blamed "other settings than the scene given" with no scene given.
+    let cut = dir.path().join("cut");
+    std::fs::create_dir_all(&cut).unwrap();
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("grainbench"))
+        .arg("run")
+        .arg(scene_file(dir.path(), "r.toml", RESUMABLE))
+        .args(["-q", "-j", "1", "--checkpoint-every", "0", "-o"])
+        .arg(&cut)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t = std::time::Instant::now();
+    while !cut.join("checkpoint.bin").exists() {
+        assert!(t.elapsed().as_secs() < 60, "no checkpoint appeared");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    grainbench()
+        .args(["run", "--resume", "--seed", "6", "-o"])
+        .arg(&cut)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("started with seed"))
+        .stderr(predicate::str::contains("--seed 6 cannot change it"));
+
+    // `check_every = 1e10` hung a 64-grain run, deaf to SIGTERM.
+    let deaf = scene_file(
+        dir.path(),
+        "deaf.toml",
+        &SMALL_3D.replace(
+            "[initial]",
+            "[numerics]\ncheck_every = 10000000000\n[initial]",
+        ),
+    );
+    grainbench()
+        .arg("run")
+        .arg(&deaf)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("deaf.toml"))
+        .stderr(predicate::str::contains("numerics.check_every"))
+        .stderr(predicate::str::contains("10000]"));
+
+    // An initial snapshot with radius 0 panicked in the same clamp.
+    let snap_path = dir.path().join("start.json");
+    let good = dir.path().join("good");
+    grainbench()
+        .arg("run")
+        .arg(scene_file(dir.path(), "s.toml", SMALL_3D))
+        .args(["-q", "-o"])
+        .arg(&good)
+        .assert()
+        .success();
+    let mut snap: Value =
+        serde_json::from_slice(&std::fs::read(good.join("final.snap.json")).unwrap()).unwrap();
+    snap["particles"]["radius"][7] = 0.0.into();
+    std::fs::write(&snap_path, serde_json::to_vec(&snap).unwrap()).unwrap();
+    let from = scene_file(
+        dir.path(),
+        "from.toml",
+        &SMALL_3D.replace(
+            "[initial]\npacking_fraction = 0.3",
+            &format!(
+                "[initial]\npacking_fraction = 0.3\nsnapshot = {:?}",
+                snap_path.display().to_string()
+            ),
+        ),
+    );
+    grainbench()
+        .arg("run")
+        .arg(&from)
+        .args(["-q", "-o"])
+        .arg(dir.path().join("from"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("start.json"))
+        .stderr(predicate::str::contains("particles.radius[7]"));
+}
+
+/// Issue 18: an output directory is never written by two runs at once, a checkpoint is never
+/// overwritten without being asked, and output names cannot collide.
+#[test]
+fn output_directory_is_protected() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_file(dir.path(), "s.toml", SMALL_3D);
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let cp = out.join("checkpoint.bin");
+    std::fs::write(&cp, "an unfinished run").unwrap();
+    grainbench()
+        .arg("run")
+        .arg(&scene)
+        .args(["-q", "-o"])
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("checkpoint of an unfinished run"))
+        .stderr(predicate::str::contains("--resume"))
+        .stderr(predicate::str::contains("--force"));
+    assert_eq!(std::fs::read_to_string(&cp).unwrap(), "an unfinished run");
+    grainbench()
+        .arg("run")
+        .arg(&scene)
+        .args(["-q", "--force", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+    assert!(!cp.exists() && out.join("final.snap.json").exists());
+
+    let clash = scene_file(
+        dir.path(),
+        "clash.toml",
+        &format!("{SMALL_3D}[output]\nsnapshot = \"summary.json\"\n"),
+    );
+    grainbench()
+        .arg("run")
+        .arg(&clash)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("output.snapshot"))
+        .stderr(predicate::str::contains("overwrite"));
+
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    grainbench()
+        .arg("run")
+        .arg(&scene)
+        .args(["-q", "-o"])
+        .arg(&file)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("is a file, not a directory"));
+
+    // A second run into the directory of a running one is refused, naming it.
+    let long = scene_file(
+        dir.path(),
+        "long.toml",
+        &SMALL_3D
+            .replace("count = 250", "count = 3000")
+            .replace("max_time = 4.0", "max_time = 1000.0"),
+    );
+    let busy = dir.path().join("busy");
+    let mut first = std::process::Command::new(assert_cmd::cargo::cargo_bin("grainbench"))
+        .arg("run")
+        .arg(&long)
+        .args(["-q", "-j", "1", "-o"])
+        .arg(&busy)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let lock = busy.join(".grainbench.lock");
+    let t = std::time::Instant::now();
+    while !std::fs::read_to_string(&lock).is_ok_and(|s| s.starts_with("pid")) {
+        assert!(t.elapsed().as_secs() < 60, "the first run took no lock");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let second = grainbench()
+        .arg("run")
+        .arg(&long)
+        .args(["-q", "-o"])
+        .arg(&busy)
+        .output()
+        .unwrap();
+    let _ = first.kill();
+    let _ = first.wait();
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!("another grainbench run (pid {})", first.id())),
+        "{err}"
+    );
+}

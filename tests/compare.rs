@@ -172,3 +172,63 @@ fn external_dumps_analyze_to_their_golden_values() {
         grainbench_engine::Snapshot::read(&snap).unwrap();
     }
 }
+
+/// Issue 18: a dump cut at a line end, or holding a NaN, used to analyse with exit 0 to a
+/// wrong z (2.109 instead of 4.453 for the LAMMPS fixture cut to 300 lines). Now each is an
+/// exit-2 error naming the file, the line and what was expected.
+#[test]
+fn damaged_external_dumps_are_refused() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let analyze = |code: &str, dir: &Path| {
+        Command::cargo_bin("grainbench")
+            .unwrap()
+            .args(["analyze", "--json", "--from", code])
+            .arg(dir)
+            .assert()
+            .code(2)
+    };
+    let copy = |code: &str| {
+        let tmp = tempfile::tempdir().unwrap();
+        let from = root.join("tests/fixtures/xcode-smoke").join(code);
+        for f in std::fs::read_dir(&from).unwrap() {
+            let f = f.unwrap().path();
+            std::fs::copy(&f, tmp.path().join(f.file_name().unwrap())).unwrap();
+        }
+        tmp
+    };
+    for code in ["lammps", "lammps-2025", "liggghts"] {
+        let tmp = copy(code);
+        let contacts = tmp.path().join("final.contacts");
+        let text = std::fs::read_to_string(&contacts).unwrap();
+        let cut: String = text.lines().take(300).map(|l| format!("{l}\n")).collect();
+        std::fs::write(&contacts, cut).unwrap();
+        analyze(code, tmp.path())
+            .stderr(predicates::str::contains("final.contacts"))
+            .stderr(predicates::str::contains("promises"))
+            .stderr(predicates::str::contains("cut short"));
+
+        let tmp = copy(code);
+        let contacts = tmp.path().join("final.contacts");
+        let mut lines: Vec<String> = std::fs::read_to_string(&contacts)
+            .unwrap()
+            .lines()
+            .map(str::to_string)
+            .collect();
+        let mut row: Vec<&str> = lines[20].split_whitespace().collect();
+        row[3] = "nan";
+        lines[20] = row.join(" ");
+        std::fs::write(&contacts, lines.join("\n") + "\n").unwrap();
+        analyze(code, tmp.path())
+            .stderr(predicates::str::contains("line 21"))
+            .stderr(predicates::str::contains("NaN"));
+    }
+    let tmp = copy("yade");
+    let inter = tmp.path().join("final.interactions");
+    let text = std::fs::read_to_string(&inter)
+        .unwrap()
+        .replacen("0.5853158713795491", "nan", 1);
+    std::fs::write(&inter, text).unwrap();
+    analyze("yade", tmp.path())
+        .stderr(predicates::str::contains("final.interactions"))
+        .stderr(predicates::str::contains("line 2"));
+}

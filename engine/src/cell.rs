@@ -89,8 +89,7 @@ impl<D: Dim> Cell<D> {
                 servo: Some(g),
             } => {
                 for a in 0..D::D {
-                    let rate =
-                        (g * (contact[a][a] - target[a]) / target[a]).clamp(-rate_cap, rate_cap);
+                    let rate = capped(g * (contact[a][a] - target[a]) / target[a], rate_cap);
                     self.ldot[a] = rate * self.l[a];
                 }
             }
@@ -103,7 +102,7 @@ impl<D: Dim> Cell<D> {
                 for a in 0..D::D {
                     let acc = omega / (self.mass * self.l[a]) * (stress[a][a] - target[a]);
                     let cap = rate_cap * self.l[a];
-                    self.ldot[a] = (self.ldot[a] + dt * acc).clamp(-cap, cap);
+                    self.ldot[a] = capped(self.ldot[a] + dt * acc, cap);
                 }
             }
         }
@@ -114,6 +113,18 @@ impl<D: Dim> Cell<D> {
         if let Control::Stress { .. } = self.control {
             self.l += self.ldot * dt;
         }
+    }
+}
+
+/// `x` limited to [−cap, cap]; NaN when the cap is NaN or negative (a cell length gone
+/// non-finite or negative), so that the run's stability check stops it with its message
+/// instead of `f64::clamp` panicking (issue 18: `pressure = 1e20`).
+#[inline]
+fn capped(x: f64, cap: f64) -> f64 {
+    if cap >= 0.0 {
+        x.clamp(-cap, cap)
+    } else {
+        f64::NAN
     }
 }
 
@@ -135,6 +146,19 @@ mod tests {
 
     /// The servo's rate is g·(σ_αα − P)/P on the contact stress, at most the cap, whatever
     /// the rate before (no cell mass); AR07 (7) instead accelerates the cell from its rate.
+    /// A cell length gone NaN or negative leaves NaN rates for the stability check to report;
+    /// it used to panic in `f64::clamp` (issue 18).
+    #[test]
+    fn kick_on_a_broken_cell_gives_nan_not_a_panic() {
+        let total = [[1.0; 3]; 3];
+        for l in [f64::NAN, -1.0] {
+            let mut c = stressed(None);
+            c.l[0] = l;
+            c.kick(&total, &total, 0.1);
+            assert!(c.ldot[0].is_nan(), "L = {l}: {}", c.ldot[0]);
+        }
+    }
+
     #[test]
     fn servo_sets_the_rate_from_the_contact_stress_and_caps_it() {
         let mut total = [[0.0; 3]; 3];

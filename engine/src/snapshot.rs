@@ -112,7 +112,7 @@ impl Snapshot {
         })?;
         let snap: Snapshot = serde_json::from_str(&text).map_err(|e| SnapshotError::Parse {
             path: p.clone(),
-            message: e.to_string(),
+            message: parse_message(&text, &e),
         })?;
         snap.check()
             .map_err(|message| SnapshotError::Invalid { path: p, message })?;
@@ -153,6 +153,66 @@ impl Snapshot {
         if p.position.iter().chain(&p.velocity).any(|x| x.len() != d) {
             return Err(format!("every position and velocity needs {d} components"));
         }
+        // Values a packing cannot have: each would analyse to a silently wrong result.
+        let fix = "(a non-finite value means the run that wrote it failed)";
+        if let Some(a) = self
+            .cell
+            .lengths
+            .iter()
+            .position(|&l| !(l.is_finite() && l > 0.0))
+        {
+            return Err(format!(
+                "field `cell.lengths[{a}]` is {}, expected a finite length > 0",
+                self.cell.lengths[a]
+            ));
+        }
+        let l_min = self
+            .cell
+            .lengths
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        for (k, &r) in p.radius.iter().enumerate() {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(format!(
+                    "field `particles.radius[{k}]` is {r}, expected a finite radius > 0 {fix}"
+                ));
+            }
+            if 2.0 * r > l_min {
+                return Err(format!(
+                    "field `particles.radius[{k}]` is {r}: the grain is wider than the cell (shortest side {l_min}); a periodic packing needs diameters below every cell length"
+                ));
+            }
+        }
+        if let Some(k) = p.mass.iter().position(|&m| !(m.is_finite() && m > 0.0)) {
+            return Err(format!(
+                "field `particles.mass[{k}]` is {}, expected a finite mass > 0 {fix}",
+                p.mass[k]
+            ));
+        }
+        for (name, col) in [
+            ("position", &p.position),
+            ("velocity", &p.velocity),
+            ("angular_velocity", &p.angular_velocity),
+        ] {
+            if let Some(k) = col.iter().position(|x| x.iter().any(|v| !v.is_finite())) {
+                return Err(format!(
+                    "field `particles.{name}[{k}]` is {:?}, expected finite numbers {fix}",
+                    col[k]
+                ));
+            }
+        }
+        if let Some(mu) = self.mu.filter(|mu| !(mu.is_finite() && *mu >= 0.0)) {
+            return Err(format!(
+                "field `mu` is {mu}, expected a friction coefficient ≥ 0 (null for μ = ∞)"
+            ));
+        }
+        if let Some(pt) = self.pressure_target.filter(|pt| !pt.is_finite()) {
+            return Err(format!(
+                "field `pressure_target` is {pt}, expected a finite number or null"
+            ));
+        }
+        let mut seen = std::collections::HashMap::with_capacity(self.contacts.len());
         for (k, c) in self.contacts.iter().enumerate() {
             if c.i >= n || c.j >= n || c.i == c.j {
                 return Err(format!(
@@ -162,6 +222,20 @@ impl Snapshot {
             }
             if c.branch.len() != d {
                 return Err(format!("contacts[{k}].branch needs {d} components"));
+            }
+            let scalars = [c.normal, c.normal_elastic, c.gap];
+            let vectors = c.branch.iter().chain(&c.tangential).chain(&c.rolling);
+            if scalars.iter().chain(vectors).any(|v| !v.is_finite()) {
+                return Err(format!(
+                    "contacts[{k}] (grains {} and {}) holds a non-finite force, branch or gap {fix}",
+                    c.i, c.j
+                ));
+            }
+            if let Some(first) = seen.insert((c.i.min(c.j), c.i.max(c.j)), k) {
+                return Err(format!(
+                    "contacts[{k}] and contacts[{first}] both join grains {} and {}: each pair is listed once (a duplicate would count twice in z)",
+                    c.i, c.j
+                ));
             }
         }
         Ok(())
@@ -199,6 +273,24 @@ impl Snapshot {
     }
 }
 
+/// serde_json's message, with a hint when the value it stopped at is a NaN or an infinity,
+/// which JSON cannot hold.
+fn parse_message(text: &str, e: &serde_json::Error) -> String {
+    let at = text
+        .lines()
+        .nth(e.line().saturating_sub(1))
+        .and_then(|l| l.get(e.column().saturating_sub(1)..))
+        .unwrap_or("");
+    let non_finite = ["NaN", "nan", "inf", "Inf", "-inf", "-Inf"]
+        .iter()
+        .any(|t| at.starts_with(t));
+    if non_finite {
+        format!("{e}: a NaN or infinite number, which JSON does not allow (the run that wrote it failed, or the writer is not JSON-conformant)")
+    } else {
+        e.to_string()
+    }
+}
+
 /// Writes `bytes` to `path` atomically: temporary file beside it, flushed, then renamed.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let dir = match path.parent() {
@@ -218,4 +310,104 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     }
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two touching disks in a 4 × 4 cell.
+    fn valid() -> Snapshot {
+        Snapshot {
+            format: FORMAT.into(),
+            version: VERSION,
+            code: "test".into(),
+            scene: "test".into(),
+            dimension: 2,
+            time: 0.0,
+            step: 0,
+            status: "imported".into(),
+            force_unit: "F0".into(),
+            pressure_target: Some(0.01),
+            cohesive: false,
+            mu: Some(0.5),
+            cell: Cell {
+                lengths: vec![4.0, 4.0],
+                contact_stress: vec![vec![0.0; 2]; 2],
+                kinetic_stress: vec![vec![0.0; 2]; 2],
+            },
+            particles: Particles {
+                radius: vec![0.5, 0.5],
+                mass: vec![1.0, 1.0],
+                position: vec![vec![1.0, 1.0], vec![2.0, 1.0]],
+                velocity: vec![vec![0.0; 2]; 2],
+                angular_velocity: vec![vec![0.0]; 2],
+            },
+            contacts: vec![Contact {
+                i: 0,
+                j: 1,
+                branch: vec![1.0, 0.0],
+                normal: 1e-3,
+                normal_elastic: 1e-3,
+                tangential: vec![0.0, 0.0],
+                rolling: vec![],
+                gap: 0.0,
+            }],
+        }
+    }
+
+    fn refused(edit: impl FnOnce(&mut Snapshot), field: &str) {
+        let mut s = valid();
+        edit(&mut s);
+        let e = s
+            .check()
+            .expect_err("an impossible snapshot must be refused");
+        assert!(e.contains(field), "{e:?} should name {field:?}");
+    }
+
+    /// Issue 18: values no packing can have are refused, naming the field, instead of
+    /// analysing to nonsense.
+    #[test]
+    fn impossible_values_are_refused_naming_the_field() {
+        valid().check().unwrap();
+        refused(|s| s.particles.radius[1] = 0.0, "particles.radius[1]");
+        refused(|s| s.particles.radius[0] = -0.5, "particles.radius[0]");
+        refused(|s| s.particles.radius[0] = 1e300, "particles.radius[0]");
+        refused(|s| s.particles.radius[0] = f64::NAN, "particles.radius[0]");
+        refused(|s| s.cell.lengths[1] = 0.0, "cell.lengths[1]");
+        refused(|s| s.cell.lengths[0] = -4.0, "cell.lengths[0]");
+        refused(|s| s.particles.mass[0] = 0.0, "particles.mass[0]");
+        refused(
+            |s| s.particles.position[1][0] = f64::NAN,
+            "particles.position[1]",
+        );
+        refused(
+            |s| s.particles.velocity[0][1] = f64::INFINITY,
+            "particles.velocity[0]",
+        );
+        refused(|s| s.mu = Some(-0.1), "field `mu`");
+        refused(|s| s.contacts[0].normal = f64::NAN, "contacts[0]");
+        refused(
+            |s| {
+                let mut c = s.contacts[0].clone();
+                (c.i, c.j) = (1, 0);
+                s.contacts.push(c);
+            },
+            "contacts[1] and contacts[0]",
+        );
+    }
+
+    /// A NaN written into the JSON text is named as such.
+    #[test]
+    fn nan_in_json_is_named() {
+        let text = serde_json::to_string(&valid())
+            .unwrap()
+            .replace("\"time\":0.0", "\"time\":NaN");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.json");
+        std::fs::write(&path, text).unwrap();
+        let e = Snapshot::read(&path).unwrap_err().to_string();
+        assert!(e.contains("NaN or infinite"), "{e}");
+        assert!(e.contains("s.json"), "{e}");
+    }
 }

@@ -120,6 +120,8 @@ fn child_run(a: &Args) -> Result<i32> {
         quiet: false,
         report: false,
         resume: false,
+        // A harness scratch directory: a leftover checkpoint is not a run to keep.
+        force: true,
         checkpoint_every: 1e12,
     };
     Ok(run(&scene, out, &flags)?.0)

@@ -42,6 +42,20 @@ pub fn snapshot(
     cohesive: bool,
     mu: Option<f64>,
 ) -> Snapshot {
+    let snap = unchecked_snapshot(lengths, radius, position, bonds, cohesive, mu);
+    snap.check().expect("fixture is a valid snapshot");
+    snap
+}
+
+/// As [`snapshot`], without [`Snapshot::check`]: for the analysis of impossible snapshots.
+pub fn unchecked_snapshot(
+    lengths: Vec<f64>,
+    radius: Vec<f64>,
+    position: Vec<Vec<f64>>,
+    bonds: &[Bond],
+    cohesive: bool,
+    mu: Option<f64>,
+) -> Snapshot {
     let d = lengths.len();
     let n = radius.len();
     let volume: f64 = lengths.iter().product();
@@ -70,7 +84,7 @@ pub fn snapshot(
             }
         })
         .collect();
-    let snap = Snapshot {
+    Snapshot {
         format: FORMAT.to_string(),
         version: VERSION,
         code: "fixture".to_string(),
@@ -96,9 +110,7 @@ pub fn snapshot(
             angular_velocity: Vec::new(),
         },
         contacts,
-    };
-    snap.check().expect("fixture is a valid snapshot");
-    snap
+    }
 }
 
 /// Periodic simple lattice (square in 2D, cubic in 3D) of `k^d` equal grains of radius

@@ -2,7 +2,9 @@
 //! crash — the scene, where in the protocol the run stands, the step reports so far and the
 //! complete integrator state ([`crate::system::State`]: positions, velocities, forces, cell,
 //! neighbour list and contact history). Binary (bincode), written atomically, so an
-//! interrupted write leaves the previous checkpoint intact.
+//! interrupted write leaves the previous checkpoint intact, and closed by a CRC-32 of all the
+//! bytes before it (version 4), so a damaged file is refused instead of resuming a different
+//! packing (issue 18).
 
 use super::report::StepReport;
 use crate::scene::Scene;
@@ -10,7 +12,9 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 pub const FORMAT: &str = "grainbench-checkpoint";
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
+/// Version 3 (no checksum) still resumes.
+const UNCHECKED_VERSION: u32 = 3;
 
 /// Where the run stands.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -49,13 +53,23 @@ impl Checkpoint {
     pub fn read(path: &Path) -> Result<Checkpoint, String> {
         let bytes = std::fs::read(path)
             .map_err(|e| format!("cannot read checkpoint {}: {e}", path.display()))?;
-        let (header, payload): (Header, Vec<u8>) = bincode::deserialize(&bytes).map_err(|e| {
+        let damaged = |why: String| {
             format!(
-                "{} is not a grainbench checkpoint or is damaged: {e}",
+                "{} is not a grainbench checkpoint or is damaged ({why}): it cannot be resumed: start the run over without --resume, or restore the file",
                 path.display()
             )
-        })?;
-        if header.format != FORMAT || header.version != VERSION {
+        };
+        let sealed = bytes.len() >= 4 && {
+            let (body, tail) = bytes.split_at(bytes.len() - 4);
+            crc32fast::hash(body).to_le_bytes() == tail
+        };
+        let (header, payload): (Header, Vec<u8>) =
+            bincode::deserialize(&bytes).map_err(|e| damaged(e.to_string()))?;
+        if !sealed && header.version != UNCHECKED_VERSION {
+            return Err(damaged("checksum mismatch".into()));
+        }
+        let version_ok = header.version == VERSION || header.version == UNCHECKED_VERSION;
+        if header.format != FORMAT || !version_ok {
             return Err(format!(
                 "{} is a {} v{} file; this grainbench reads {FORMAT} v{VERSION}",
                 path.display(),
@@ -82,7 +96,9 @@ impl Checkpoint {
 
     /// Writes header and payload atomically.
     pub fn write(path: &Path, header: &Header, payload: &[u8]) -> std::io::Result<()> {
-        let bytes = bincode::serialize(&(header, payload)).map_err(std::io::Error::other)?;
+        let mut bytes = bincode::serialize(&(header, payload)).map_err(std::io::Error::other)?;
+        let crc = crc32fast::hash(&bytes);
+        bytes.extend_from_slice(&crc.to_le_bytes());
         crate::snapshot::write_atomic(path, &bytes)
     }
 }
@@ -100,4 +116,59 @@ pub fn encode<T: Serialize>(x: &T) -> Vec<u8> {
 /// Decodes a typed state.
 pub fn decode<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> Result<T, String> {
     bincode::deserialize(bytes).map_err(|e| format!("checkpoint state does not decode: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header(version: u32) -> Header {
+        Header {
+            format: FORMAT.into(),
+            version,
+            code: code(),
+            scene_json: "{}".into(),
+            stage: 1,
+            inside: true,
+            stage_time0: 0.5,
+            stage_steps0: 7,
+            stage_wall: 1.0,
+            wall_seconds: 2.0,
+            reports: Vec::new(),
+            pressure: Some(0.01),
+            neighbor_builds: 3,
+        }
+    }
+
+    /// Issue 18: one damaged byte anywhere, or a cut file, is refused as damaged; it used to
+    /// resume a different packing.
+    #[test]
+    fn damaged_checkpoints_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("checkpoint.bin");
+        let payload: Vec<u8> = (0..200u8).collect();
+        Checkpoint::write(&path, &header(VERSION), &payload).unwrap();
+        let good = std::fs::read(&path).unwrap();
+        let cp = Checkpoint::read(&path).unwrap();
+        assert_eq!((cp.payload, cp.header.stage), (payload.clone(), 1));
+        for k in (0..good.len()).step_by(7).chain([good.len() - 1]) {
+            let mut bad = good.clone();
+            bad[k] ^= 0x10;
+            std::fs::write(&path, &bad).unwrap();
+            let e = Checkpoint::read(&path).expect_err("a flipped byte must be refused");
+            assert!(e.contains("damaged"), "byte {k}: {e}");
+        }
+        std::fs::write(&path, &good[..good.len() - 9]).unwrap();
+        assert!(Checkpoint::read(&path).unwrap_err().contains("damaged"));
+    }
+
+    /// Checkpoints of version 3, written before the checksum, still resume.
+    #[test]
+    fn version_3_checkpoints_still_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("checkpoint.bin");
+        let bytes = bincode::serialize(&(header(3), vec![1u8, 2, 3])).unwrap();
+        std::fs::write(&path, bytes).unwrap();
+        assert_eq!(Checkpoint::read(&path).unwrap().payload, vec![1, 2, 3]);
+    }
 }

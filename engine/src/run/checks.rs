@@ -69,6 +69,18 @@ pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
         "{what}. Likely cause: the time step dt = {:.4e} (numerics.dt_fraction = {} of the contact duration for K_max = {:.4e}) is too large for the contacts, or the contacts are too soft (law.kappa) for the applied pressure. Try a smaller numerics.dt_fraction, or a larger numerics.stiffness_force if forces exceed the expected scale",
         sys.dt, num.dt_fraction, k_max
     );
+    stopped(scene, num, sys, last_good, cause)
+}
+
+/// The run stops as [`RunError::Unstable`] for `cause` (the whole message), restoring the
+/// last good state for the snapshot it carries.
+pub(super) fn stopped<D: Dim, L: ContactLaw<D>>(
+    scene: &str,
+    num: &StageNumerics,
+    sys: &mut System<D, L>,
+    last_good: &Option<system::LastGood<D, L>>,
+    cause: String,
+) -> RunError {
     let (step, time) = (sys.step, sys.time);
     if let Some(cp) = last_good {
         sys.restore(cp);

@@ -2,7 +2,9 @@
 //! hard-grain stages (expansion, event-driven mixing, growth).
 
 use super::checkpoint::{self, Checkpoint, Header};
-use super::checks::{contacts_at_threshold, measure, settle_view, step_correlation, unstable};
+use super::checks::{
+    contacts_at_threshold, measure, settle_view, step_correlation, stopped, unstable,
+};
 use super::checks::{FLIP_CHECKS, FLIP_CORRELATION};
 use super::numerics::StageNumerics;
 use super::options::{CheckpointSpec, RunOptions};
@@ -394,6 +396,17 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     sys,
                     &last_good,
                     "non-finite velocities, forces or cell lengths".into(),
+                ));
+            }
+            // The cell may shrink below the minimum-image limit while compressing (issue 18:
+            // `count = 8` counted a pair touching through two images once, exit 0).
+            if let Err(e) = sys.check_cell() {
+                return Err(stopped(
+                    &scene.name,
+                    &num,
+                    sys,
+                    &last_good,
+                    format!("the cell shrank during the stage: {e} (particles.count): a pair would interact through two periodic images, which the minimum-image convention counts once"),
                 ));
             }
             if checks.kinetic_per_grain > 1e4 * (num.f_ref + ke0) {

@@ -262,7 +262,7 @@ pub struct Numerics {
     /// `false` is LAMMPS's (and LIGGGHTS's) `remap x`: positions follow the cell,
     /// velocities do not. Without it our engine's servo loop goes unstable (README).
     pub affine_velocity: bool,
-    /// Steps between equilibrium checks and progress reports.
+    /// Steps between equilibrium checks and progress reports (1 to 10 000).
     pub check_every: u64,
     /// The run stops as unstable when an overlap exceeds this fraction of the smaller radius.
     pub max_overlap: f64,

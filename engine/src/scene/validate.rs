@@ -5,6 +5,18 @@ use super::{Arrangement, ForceScale, Law, Mu, Scene, Step};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+/// Largest `numerics.check_every`: a stop request is honoured within this many steps
+/// (issue 18: 1e10 hung the run, deaf to SIGTERM).
+pub const MAX_CHECK_EVERY: u64 = 10_000;
+
+/// Files a run writes beside its snapshot in the output directory.
+pub const RESERVED_OUTPUT_NAMES: [&str; 4] = [
+    "summary.json",
+    "checkpoint.bin",
+    "last-good.snap.json",
+    ".grainbench.lock",
+];
+
 /// An error in a scene file, naming the file, the field and what is allowed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneError {
@@ -294,8 +306,14 @@ impl Scene {
                 ));
             }
         }
-        if n.check_every == 0 {
-            return Err(err("numerics.check_every", "must be ≥ 1".into()));
+        if !(1..=MAX_CHECK_EVERY).contains(&n.check_every) {
+            return Err(err(
+                "numerics.check_every",
+                format!(
+                    "is {}, must be in [1, {MAX_CHECK_EVERY}]: the criteria, max_time, progress and a stop request (Ctrl-C, SIGTERM) are looked at only every check_every steps, and a check costs about one step",
+                    n.check_every
+                ),
+            ));
         }
         in_range("numerics.max_overlap", n.max_overlap, 1e-6, 1.0)?;
         if self.protocol.is_empty() {
@@ -446,6 +464,16 @@ impl Scene {
                 format!(
                     "must be a plain file name (no directories), got {:?}",
                     self.output.snapshot
+                ),
+            ));
+        }
+        let name = self.output.snapshot.as_str();
+        if matches!(name, "." | "..") || RESERVED_OUTPUT_NAMES.contains(&name) {
+            return Err(err(
+                "output.snapshot",
+                format!(
+                    "{name:?} is a name the run itself uses in the output directory ({}): the files would overwrite each other; choose another name, e.g. \"final.snap.json\"",
+                    RESERVED_OUTPUT_NAMES.join(", ")
                 ),
             ));
         }

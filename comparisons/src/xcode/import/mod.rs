@@ -256,7 +256,13 @@ pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
     let start = text.rfind("ITEM: TIMESTEP").ok_or_else(|| {
         ImportError::new(path, "no `ITEM: TIMESTEP` line: not a LAMMPS-style dump")
     })?;
-    let mut lines = text[start..].lines().peekable();
+    // Lines numbered from 1 in the whole file, for the messages.
+    let first_line = text[..start].matches('\n').count() + 1;
+    let mut lines = text[start..]
+        .lines()
+        .enumerate()
+        .map(|(k, l)| (first_line + k, l));
+    let mut promised: Option<(usize, usize)> = None;
     // `dump_modify time yes` writes `ITEM: TIME` and its value right before `ITEM: TIMESTEP`.
     let time = match text[..start].rfind("ITEM: TIME\n") {
         Some(k) if text[k..start].lines().count() == 2 => {
@@ -275,18 +281,27 @@ pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
         columns: Vec::new(),
         rows: Vec::new(),
     };
-    while let Some(line) = lines.next() {
+    while let Some((_, line)) = lines.next() {
         if line.starts_with("ITEM: TIMESTEP") {
-            let v = lines
+            let (_, v) = lines
                 .next()
                 .ok_or_else(|| ImportError::new(path, "missing timestep value"))?;
             sec.timestep = v
                 .trim()
                 .parse()
                 .map_err(|e| ImportError::new(path, format!("timestep {v:?}: {e}")))?;
+        } else if line.starts_with("ITEM: NUMBER OF") {
+            let (at, v) = lines
+                .next()
+                .ok_or_else(|| ImportError::new(path, format!("missing value after {line:?}")))?;
+            let count = v
+                .trim()
+                .parse()
+                .map_err(|e| ImportError::new(path, format!("line {at}: {line} {v:?}: {e}")))?;
+            promised = Some((count, at));
         } else if line.starts_with("ITEM: BOX BOUNDS") {
             for _ in 0..3 {
-                let b = lines
+                let (_, b) = lines
                     .next()
                     .ok_or_else(|| ImportError::new(path, "box bounds cut short"))?;
                 let v: Vec<f64> = b
@@ -304,7 +319,7 @@ pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
             .or_else(|| line.strip_prefix("ITEM: ENTRIES"))
         {
             sec.columns = rest.split_whitespace().map(str::to_string).collect();
-            for row in lines.by_ref() {
+            for (at, row) in lines.by_ref() {
                 if row.starts_with("ITEM:") {
                     break;
                 }
@@ -315,18 +330,39 @@ pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
                     .split_whitespace()
                     .map(|x| x.parse::<f64>())
                     .collect::<Result<_, _>>()
-                    .map_err(|e| ImportError::new(path, format!("row {row:?}: {e}")))?;
+                    .map_err(|e| ImportError::new(path, format!("line {at}: row {row:?}: {e}")))?;
                 if v.len() != sec.columns.len() {
                     return Err(ImportError::new(
                         path,
                         format!(
-                            "row {row:?} has {} values for {} columns",
+                            "line {at}: row {row:?} has {} values for {} columns",
                             v.len(),
                             sec.columns.len()
                         ),
                     ));
                 }
+                if let Some(c) = v.iter().position(|x| !x.is_finite()) {
+                    return Err(ImportError::new(
+                        path,
+                        format!(
+                            "line {at}: column `{}` is {}: the code that wrote the dump failed (a non-finite position or force cannot be analysed)",
+                            sec.columns[c], v[c]
+                        ),
+                    ));
+                }
                 sec.rows.push(v);
+            }
+            // Issue 18: a dump cut at a line end used to import silently (z halved).
+            if let Some((count, at)) = promised {
+                if count != sec.rows.len() {
+                    return Err(ImportError::new(
+                        path,
+                        format!(
+                            "the last frame promises {count} rows (line {at}, `ITEM: NUMBER OF …`) but holds {}: the dump is cut short or damaged; rerun the code or restore the file",
+                            sec.rows.len()
+                        ),
+                    ));
+                }
             }
             break;
         }

@@ -49,6 +49,15 @@ impl Table {
                     ),
                 ));
             }
+            if let Some(c) = v.iter().position(|x| !x.is_finite()) {
+                return Err(ImportError::new(
+                    path,
+                    format!(
+                        "line {line_no}: column `{}` is {}: the code that wrote it failed (a non-finite position or force cannot be analysed)",
+                        columns[c], v[c]
+                    ),
+                ));
+            }
             rows.push((line_no, v));
         }
         Ok(Table { columns, rows })
