@@ -581,6 +581,22 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
         .stderr(predicate::str::contains("cell shrank"))
         .stderr(predicate::str::contains("two periodic images"));
 
+    // `mu = "abc"` pointed at `[law]` without naming the field.
+    let abc = scene_file(
+        dir.path(),
+        "abc.toml",
+        &SMALL_3D.replace("mu = 0.3", "mu = \"abc\""),
+    );
+    grainbench()
+        .arg("run")
+        .arg(&abc)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("abc.toml"))
+        .stderr(predicate::str::contains(
+            "`mu` must be a non-negative number",
+        ));
+
     // `-j 0` silently meant every core.
     grainbench()
         .args(["run", "-j", "0"])

@@ -109,7 +109,7 @@ impl<'de> Deserialize<'de> for Mu {
         impl serde::de::Visitor<'_> for V {
             type Value = Mu;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a non-negative number or \"inf\"")
+                f.write_str("`mu` as a non-negative number or \"inf\"")
             }
             fn visit_f64<E: serde::de::Error>(self, x: f64) -> Result<Mu, E> {
                 if x.is_infinite() && x > 0.0 {
@@ -128,7 +128,7 @@ impl<'de> Deserialize<'de> for Mu {
                 match s {
                     "inf" | "infinity" | "Infinity" => Ok(Mu::Infinite),
                     _ => Err(E::custom(format!(
-                        "expected a non-negative number or \"inf\", found \"{s}\""
+                        "`mu` must be a non-negative number or \"inf\", found \"{s}\""
                     ))),
                 }
             }
