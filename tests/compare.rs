@@ -222,6 +222,22 @@ fn damaged_external_dumps_are_refused() {
             .stderr(predicates::str::contains("line 21"))
             .stderr(predicates::str::contains("NaN"));
     }
+    // A deck.json that does not describe the dumps.
+    for (from, to, says) in [
+        ("\"dimension\": 3", "\"dimension\": 2", "says dimension 2"),
+        ("\"mu\": 0.3", "\"mu\": 0.0", "says μ = 0"),
+        ("\"n\": 256", "\"n\": 255", "deck.json says 255"),
+    ] {
+        let tmp = copy("lammps");
+        let deck = tmp.path().join("deck.json");
+        let text = std::fs::read_to_string(&deck).unwrap();
+        assert!(text.contains(from), "fixture deck.json has {from}");
+        std::fs::write(&deck, text.replace(from, to)).unwrap();
+        analyze("lammps", tmp.path())
+            .stderr(predicates::str::contains("deck.json"))
+            .stderr(predicates::str::contains(says));
+    }
+
     let tmp = copy("yade");
     let inter = tmp.path().join("final.interactions");
     let text = std::fs::read_to_string(&inter)

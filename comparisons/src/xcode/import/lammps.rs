@@ -56,11 +56,8 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
         // fx fy fz: normal force on i, along x_i − x_j when repulsive.
         let normal = -(0..d).map(|a| r[3 + a] * n[a]).sum::<f64>();
         // p1 p2 p3: tangential force on i; on j it is the opposite.
-        let tangential = if meta.mu == Some(0.0) {
-            Vec::new()
-        } else {
-            (0..d).map(|a| -r[6 + a]).collect()
-        };
+        // Read even for μ = 0, so that `assemble` can check the deck.json against them.
+        let tangential = (0..d).map(|a| -r[6 + a]).collect();
         raw.contacts.push(RawContact {
             i,
             j,

@@ -81,11 +81,8 @@ fn read_contacts(
         // Force on j = −(force on i); normal repulsive positive = (force on j)·n.
         let f_on_j: Vec<f64> = (0..d).map(|a| -f_on_i[a]).collect();
         let normal: f64 = (0..d).map(|a| f_on_j[a] * n[a]).sum();
-        let tangential: Vec<f64> = if meta.mu == Some(0.0) {
-            Vec::new()
-        } else {
-            (0..d).map(|a| f_on_j[a] - normal * n[a]).collect()
-        };
+        // Read even for μ = 0, so that `assemble` can check the deck.json against them.
+        let tangential: Vec<f64> = (0..d).map(|a| f_on_j[a] - normal * n[a]).collect();
         out.push(RawContact {
             i,
             j,

@@ -132,6 +132,7 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
             raw.mass.len()
         ));
     }
+    check_against_deck(&raw, meta)?;
     let l: Vec<f64> = raw.lengths[..d].to_vec();
     let origin: Vec<f64> = if raw.origin.len() >= d {
         raw.origin[..d].to_vec()
@@ -165,8 +166,14 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
                 c.i, c.j
             ));
         }
+        // μ = 0: the tangential columns were checked to be ~0 and are left out.
+        let tangential: &[f64] = if meta.mu == Some(0.0) {
+            &[]
+        } else {
+            &c.tangential
+        };
         let mut force: Vec<f64> = branch.iter().map(|x| c.normal * x / dist).collect();
-        for (a, t) in c.tangential.iter().take(d).enumerate() {
+        for (a, t) in tangential.iter().take(d).enumerate() {
             force[a] += t;
         }
         for a in 0..d {
@@ -181,10 +188,10 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
             branch,
             normal: c.normal,
             normal_elastic: c.normal_elastic.unwrap_or(c.normal),
-            tangential: if c.tangential.is_empty() {
+            tangential: if tangential.is_empty() {
                 Vec::new()
             } else {
-                c.tangential[..d].to_vec()
+                tangential[..d].to_vec()
             },
             rolling: c.rolling.clone(),
         });
@@ -235,6 +242,57 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
     };
     snap.check()?;
     Ok(snap)
+}
+
+/// What `deck.json` promises against what the dumps hold (issue 18: a deck.json saying 2D for
+/// 3D dumps, or μ = 0 for frictional ones, silently changed the result).
+fn check_against_deck(raw: &Raw, meta: &Meta) -> Result<(), String> {
+    let n = raw.position.len();
+    if meta.n != 0 && meta.n != n {
+        return Err(format!(
+            "deck.json says n = {} grains, the dumps hold {n}: grains were lost, or the deck.json is another run's",
+            meta.n
+        ));
+    }
+    if meta.dimension == 2 {
+        flat(
+            raw.position.iter().filter_map(|p| p.get(2).copied()),
+            &raw.radius,
+        )?;
+    }
+    if meta.mu == Some(0.0) {
+        let n_max = raw
+            .contacts
+            .iter()
+            .map(|c| c.normal.abs())
+            .fold(0.0, f64::max);
+        let t_max = raw
+            .contacts
+            .iter()
+            .flat_map(|c| c.tangential.iter().map(|t| t.abs()))
+            .fold(0.0, f64::max);
+        if t_max > 1e-6 * n_max {
+            return Err(format!(
+                "deck.json says μ = 0, but contacts carry tangential forces up to {t_max:.4e} (normal forces up to {n_max:.4e}): the dumps are frictional; give the deck.json of the run that wrote them"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A 2D deck's grains all lie in one plane z = const (to 1e-6 of the largest radius).
+fn flat(z: impl Iterator<Item = f64>, radius: &[f64]) -> Result<(), String> {
+    let (lo, hi) = z.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| {
+        (a.min(z), b.max(z))
+    });
+    let r_max = radius.iter().copied().fold(0.0, f64::max);
+    if hi - lo > 1e-6 * r_max {
+        return Err(format!(
+            "deck.json says dimension 2, but the grains' z coordinates span {:.4e}: the dumps are 3D; give the deck.json of the run that wrote them",
+            hi - lo
+        ));
+    }
+    Ok(())
 }
 
 /// Whitespace-separated numeric columns of a LAMMPS/LIGGGHTS dump section, located by the
@@ -434,6 +492,10 @@ pub fn read_atoms(
         .collect();
     if index.len() != rows.len() {
         return Err(ImportError::new(path, "repeated atom ids"));
+    }
+    if d == 2 {
+        let radius: Vec<f64> = rows.iter().map(|r| r[rad]).collect();
+        flat(rows.iter().map(|r| r[x[2]]), &radius).map_err(|e| ImportError::new(path, e))?;
     }
     let mut raw = Raw {
         lengths: sec.bounds.iter().map(|(lo, hi)| hi - lo).collect(),
