@@ -541,6 +541,14 @@ fn every_stage_kind_runs_in_order() {
     assert_eq!(snap["pressure_target"], 4.0);
 }
 
+/// Runs `cmd` and checks its exit status and that its stderr contains each of `needles`.
+fn fails(cmd: &mut assert_cmd::Command, code: i32, needles: &[&str]) {
+    let mut a = cmd.assert().code(code);
+    for n in needles {
+        a = a.stderr(predicate::str::contains(*n));
+    }
+}
+
 /// Issue 18: inputs that used to panic (exit 101) or hang now end with a clear error.
 #[test]
 fn hostile_scene_inputs_neither_panic_nor_hang() {
@@ -571,15 +579,15 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
         "eight.toml",
         &SMALL_3D.replace("count = 250", "count = 8"),
     );
-    grainbench()
-        .arg("run")
-        .arg(&eight)
-        .args(["-q", "-o"])
-        .arg(dir.path().join("eight"))
-        .assert()
-        .code(4)
-        .stderr(predicate::str::contains("cell shrank"))
-        .stderr(predicate::str::contains("two periodic images"));
+    fails(
+        grainbench()
+            .arg("run")
+            .arg(&eight)
+            .args(["-q", "-o"])
+            .arg(dir.path().join("eight")),
+        4,
+        &["cell shrank", "two periodic images"],
+    );
 
     // `mu = "abc"` pointed at `[law]` without naming the field.
     let abc = scene_file(
@@ -587,23 +595,18 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
         "abc.toml",
         &SMALL_3D.replace("mu = 0.3", "mu = \"abc\""),
     );
-    grainbench()
-        .arg("run")
-        .arg(&abc)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("abc.toml"))
-        .stderr(predicate::str::contains(
-            "`mu` must be a non-negative number",
-        ));
+    fails(
+        grainbench().arg("run").arg(&abc),
+        2,
+        &["abc.toml", "`mu` must be a non-negative number"],
+    );
 
     // `-j 0` silently meant every core.
-    grainbench()
-        .args(["run", "-j", "0"])
-        .arg(&eight)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("-j 0"));
+    fails(
+        grainbench().args(["run", "-j", "0"]).arg(&eight),
+        2,
+        &["-j 0"],
+    );
 
     // `--resume --seed 6` blamed "other settings than the scene given" with no scene given.
     let cut = dir.path().join("cut");
@@ -623,13 +626,13 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
     }
     child.kill().unwrap();
     child.wait().unwrap();
-    grainbench()
-        .args(["run", "--resume", "--seed", "6", "-o"])
-        .arg(&cut)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("started with seed"))
-        .stderr(predicate::str::contains("--seed 6 cannot change it"));
+    fails(
+        grainbench()
+            .args(["run", "--resume", "--seed", "6", "-o"])
+            .arg(&cut),
+        2,
+        &["started with seed", "--seed 6 cannot change it"],
+    );
 
     // `check_every = 1e10` hung a 64-grain run, deaf to SIGTERM.
     let deaf = scene_file(
@@ -640,14 +643,11 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
             "[numerics]\ncheck_every = 10000000000\n[initial]",
         ),
     );
-    grainbench()
-        .arg("run")
-        .arg(&deaf)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("deaf.toml"))
-        .stderr(predicate::str::contains("numerics.check_every"))
-        .stderr(predicate::str::contains("10000]"));
+    fails(
+        grainbench().arg("run").arg(&deaf),
+        2,
+        &["deaf.toml", "numerics.check_every", "10000]"],
+    );
 
     // An initial snapshot with radius 0 panicked in the same clamp.
     let snap_path = dir.path().join("start.json");
@@ -674,15 +674,15 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
             ),
         ),
     );
-    grainbench()
-        .arg("run")
-        .arg(&from)
-        .args(["-q", "-o"])
-        .arg(dir.path().join("from"))
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("start.json"))
-        .stderr(predicate::str::contains("particles.radius[7]"));
+    fails(
+        grainbench()
+            .arg("run")
+            .arg(&from)
+            .args(["-q", "-o"])
+            .arg(dir.path().join("from")),
+        2,
+        &["start.json", "particles.radius[7]"],
+    );
 }
 
 /// Issue 18: an output directory is never written by two runs at once, a checkpoint is never
@@ -695,16 +695,15 @@ fn output_directory_is_protected() {
     std::fs::create_dir_all(&out).unwrap();
     let cp = out.join("checkpoint.bin");
     std::fs::write(&cp, "an unfinished run").unwrap();
-    grainbench()
-        .arg("run")
-        .arg(&scene)
-        .args(["-q", "-o"])
-        .arg(&out)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("checkpoint of an unfinished run"))
-        .stderr(predicate::str::contains("--resume"))
-        .stderr(predicate::str::contains("--force"));
+    fails(
+        grainbench()
+            .arg("run")
+            .arg(&scene)
+            .args(["-q", "-o"])
+            .arg(&out),
+        2,
+        &["checkpoint of an unfinished run", "--resume", "--force"],
+    );
     assert_eq!(std::fs::read_to_string(&cp).unwrap(), "an unfinished run");
     grainbench()
         .arg("run")
@@ -720,24 +719,23 @@ fn output_directory_is_protected() {
         "clash.toml",
         &format!("{SMALL_3D}[output]\nsnapshot = \"summary.json\"\n"),
     );
-    grainbench()
-        .arg("run")
-        .arg(&clash)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("output.snapshot"))
-        .stderr(predicate::str::contains("overwrite"));
+    fails(
+        grainbench().arg("run").arg(&clash),
+        2,
+        &["output.snapshot", "overwrite"],
+    );
 
     let file = dir.path().join("a-file");
     std::fs::write(&file, "x").unwrap();
-    grainbench()
-        .arg("run")
-        .arg(&scene)
-        .args(["-q", "-o"])
-        .arg(&file)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("is a file, not a directory"));
+    fails(
+        grainbench()
+            .arg("run")
+            .arg(&scene)
+            .args(["-q", "-o"])
+            .arg(&file),
+        2,
+        &["is a file, not a directory"],
+    );
 
     // A second run into the directory of a running one is refused, naming it.
     let long = scene_file(
