@@ -105,6 +105,11 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
             cp_path.display()
         );
     }
+    if flags.force && !flags.resume && cp_path.exists() {
+        // Gone now, so that a crash before this run's first checkpoint cannot resume it.
+        std::fs::remove_file(&cp_path)
+            .with_context(|| format!("deleting the old checkpoint {}", cp_path.display()))?;
+    }
     let resume = if flags.resume {
         let cp = Checkpoint::read(&cp_path).map_err(|e| {
             anyhow::anyhow!("{e}\n(--resume continues a run from {}; there is nothing to resume without it: run without --resume)", cp_path.display())
