@@ -271,7 +271,10 @@ fn check_against_deck(raw: &Raw, meta: &Meta) -> Result<(), String> {
             .iter()
             .flat_map(|c| c.tangential.iter().map(|t| t.abs()))
             .fold(0.0, f64::max);
-        if t_max > 1e-6 * n_max {
+        // LIGGGHTS's tangential part is the total force less its projection on the normal
+        // from the dumped positions, which leaves ~2e-6 of the forces (xcode-sjkr-smoke);
+        // a frictional packing's |T| is of order μN.
+        if t_max > 1e-3 * n_max {
             return Err(format!(
                 "deck.json says μ = 0, but contacts carry tangential forces up to {t_max:.4e} (normal forces up to {n_max:.4e}): the dumps are frictional; give the deck.json of the run that wrote them"
             ));
