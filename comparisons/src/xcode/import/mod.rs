@@ -245,15 +245,9 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
 }
 
 /// What `deck.json` promises against what the dumps hold (issue 18: a deck.json saying 2D for
-/// 3D dumps, or μ = 0 for frictional ones, silently changed the result).
+/// 3D dumps, or μ = 0 for frictional ones, silently changed the result). The grain count is
+/// checked by each reader.
 fn check_against_deck(raw: &Raw, meta: &Meta) -> Result<(), String> {
-    let n = raw.position.len();
-    if meta.n != 0 && meta.n != n {
-        return Err(format!(
-            "deck.json says n = {} grains, the dumps hold {n}: grains were lost, or the deck.json is another run's",
-            meta.n
-        ));
-    }
     if meta.dimension == 2 {
         flat(
             raw.position.iter().filter_map(|p| p.get(2).copied()),
