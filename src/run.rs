@@ -11,6 +11,10 @@ use grainbench_engine::{snapshot, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
+/// Above this many steps to the time limits, a scene with warnings is told so once the time
+/// step is known.
+const LONG_RUN_STEPS: f64 = 1e7;
+
 /// Options of one run.
 #[derive(Clone)]
 pub struct RunFlags {
@@ -137,6 +141,13 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
         rayon::current_num_threads(),
         out.display()
     );
+    let warnings = scene.warnings();
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    // The stages' time limits in steps, said once the time step is known.
+    let time_limits: f64 = scene.stages().iter().map(|(_, s)| s.max_time()).sum();
+    let mut told_steps = warnings.is_empty();
     let bar = if quiet {
         ProgressBar::hidden()
     } else {
@@ -152,6 +163,18 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
     let mut last_line = std::time::Instant::now();
     let mut on_progress = |p: &Progress| {
         let c = &p.checks;
+        if !told_steps && p.dt > 0.0 {
+            told_steps = true;
+            let steps = time_limits / p.dt;
+            if steps.is_finite() && steps > LONG_RUN_STEPS {
+                bar.suspend(|| {
+                    eprintln!(
+                        "note: dt = {:.3e}: the stages' time limits ({time_limits:.3e}) allow up to {steps:.2e} steps",
+                        p.dt
+                    )
+                });
+            }
+        }
         if plain && last_line.elapsed().as_secs_f64() >= 5.0 {
             last_line = std::time::Instant::now();
             eprintln!(

@@ -589,6 +589,28 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
         &["cell shrank", "two periodic images"],
     );
 
+    // `min_diameter = 1e-2` in 3D was accepted without a word on its 1000× steps.
+    let tiny = scene_file(
+        dir.path(),
+        "tiny.toml",
+        &SMALL_3D
+            .replace("count = 250", "count = 250\nmin_diameter = 0.01")
+            .replace("max_time = 4.0", "max_time = 1e-4"),
+    );
+    let out = grainbench()
+        .arg("run")
+        .arg(&tiny)
+        .args(["-q", "-o"])
+        .arg(dir.path().join("tiny"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("warning: particles.min_diameter = 0.01") && err.contains("1000× the steps"),
+        "{err}"
+    );
+
     // `mu = "abc"` pointed at `[law]` without naming the field.
     let abc = scene_file(
         dir.path(),

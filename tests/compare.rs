@@ -207,6 +207,21 @@ fn damaged_external_dumps_are_refused() {
             .stderr(predicates::str::contains("promises"))
             .stderr(predicates::str::contains("cut short"));
 
+        // tests/fuzz.rs: the `NUMBER OF ENTRIES` line swapped into the rows cut the frame.
+        let tmp = copy(code);
+        let contacts = tmp.path().join("final.contacts");
+        let mut lines: Vec<String> = std::fs::read_to_string(&contacts)
+            .unwrap()
+            .lines()
+            .map(str::to_string)
+            .collect();
+        assert!(lines[2].starts_with("ITEM: NUMBER OF"));
+        lines.swap(2, 300);
+        std::fs::write(&contacts, lines.join("\n") + "\n").unwrap();
+        analyze(code, tmp.path())
+            .stderr(predicates::str::contains("final.contacts"))
+            .stderr(predicates::str::contains("NUMBER OF"));
+
         let tmp = copy(code);
         let contacts = tmp.path().join("final.contacts");
         let mut lines: Vec<String> = std::fs::read_to_string(&contacts)
@@ -247,4 +262,14 @@ fn damaged_external_dumps_are_refused() {
     analyze("yade", tmp.path())
         .stderr(predicates::str::contains("final.interactions"))
         .stderr(predicates::str::contains("line 2"));
+
+    // YADE's tables end in `# rows N`: a file cut at a line end lacks it.
+    let tmp = copy("yade");
+    let inter = tmp.path().join("final.interactions");
+    let text = std::fs::read_to_string(&inter).unwrap();
+    let cut: String = text.lines().take(300).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&inter, cut).unwrap();
+    analyze("yade", tmp.path())
+        .stderr(predicates::str::contains("final.interactions"))
+        .stderr(predicates::str::contains("cut short"));
 }

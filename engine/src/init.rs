@@ -50,8 +50,10 @@ pub fn random_gas<D: Dim>(
     for a in 0..D::D {
         l[a] = side;
     }
-    // Grid of cells of side ≥ 1 (the largest diameter).
-    let m = (side.floor() as usize).max(1);
+    // Grid of cells of side ≥ 1 (the largest diameter), at most ~4 cells a grain: a dilute
+    // gas (a tiny `phi`) gets larger cells, not a grid beyond memory (or an overflow).
+    let m_max = ((4 * n) as f64).powf(1.0 / D::D as f64).floor().max(1.0);
+    let m = side.floor().clamp(1.0, m_max) as usize;
     let total = m.pow(D::D as u32);
     let mut grid: Vec<Vec<u32>> = vec![Vec::new(); total];
     let cell_index = |s: &D::V| -> [usize; 3] {
@@ -204,6 +206,16 @@ mod tests {
         }
         assert_eq!(class_diameter(0, 5, 0.5), 0.5);
         assert_eq!(class_diameter(4, 5, 0.5), 1.0);
+    }
+
+    /// Issue 18 (tests/fuzz.rs): `packing_fraction = 1e-300` overflowed `m.pow(d)` for the grid.
+    #[test]
+    fn a_dilute_gas_gets_a_small_grid() {
+        for phi in [1e-300, 1e-9] {
+            let g = random_gas::<D3>(20, 1.0, None, phi, 1).unwrap();
+            assert_eq!(g.s.len(), 20);
+            no_overlap(&g);
+        }
     }
 
     #[test]

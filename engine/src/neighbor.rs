@@ -77,11 +77,17 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         let n = s.len();
         let r_max = radius.iter().cloned().fold(0.0, f64::max);
         let reach = 2.0 * r_max + range + self.skin;
-        // Cells of side ≥ reach; fewer than 3 along an axis falls back to all pairs.
+        // Cells of side ≥ reach; fewer than 3 along an axis falls back to all pairs. At most
+        // ~64 cells a grain: a dilute gas gets larger cells, not a grid beyond memory (or an
+        // overflow of the cell count, found by tests/fuzz.rs).
         let mut ncell = [1usize; 3];
         let mut brute = false;
+        let most = ((64 * n.max(1)) as f64)
+            .powf(1.0 / D::D as f64)
+            .floor()
+            .max(3.0);
         for a in 0..D::D {
-            ncell[a] = (l[a] / reach).floor() as usize;
+            ncell[a] = (l[a] / reach).floor().min(most) as usize;
             if ncell[a] < 3 {
                 brute = true;
             }

@@ -178,11 +178,27 @@ impl Snapshot {
                     "field `particles.radius[{k}]` is {r}, expected a finite radius > 0 {fix}"
                 ));
             }
-            if 2.0 * r > l_min {
+            // Minimum image: with every side at least two diameters, a pair touches through
+            // one periodic image only (tests/fuzz.rs: a YADE cell of side 1 for diameters of 1
+            // analysed to z^II = 18.8).
+            if 4.0 * r > l_min {
                 return Err(format!(
-                    "field `particles.radius[{k}]` is {r}: the grain is wider than the cell (shortest side {l_min}); a periodic packing needs diameters below every cell length"
+                    "field `particles.radius[{k}]` is {r}: the shortest cell side {l_min} is less than two diameters; a periodic packing needs every side ≥ 2 diameters, so that a pair touches through one image only"
                 ));
             }
+        }
+        let volume: f64 = self.cell.lengths.iter().product();
+        if !volume.is_finite() {
+            return Err(format!(
+                "field `cell.lengths` {:?} gives a cell volume of {volume}: no packing fills it",
+                self.cell.lengths
+            ));
+        }
+        let phi = self.packing_fraction();
+        if phi >= 1.0 {
+            return Err(format!(
+                "the grains' volumes add up to Φ = {phi:.4} of the cell: `particles.radius` or `cell.lengths` is wrong (a packing has Φ < 1)"
+            ));
         }
         if let Some(k) = p.mass.iter().position(|&m| !(m.is_finite() && m > 0.0)) {
             return Err(format!(
@@ -377,6 +393,24 @@ mod tests {
         refused(|s| s.cell.lengths[1] = 0.0, "cell.lengths[1]");
         refused(|s| s.cell.lengths[0] = -4.0, "cell.lengths[0]");
         refused(|s| s.particles.mass[0] = 0.0, "particles.mass[0]");
+        // tests/fuzz.rs: a volume overflowing to ∞ gave Φ = 0; grains filling more than the
+        // cell give Φ ≥ 1.
+        refused(|s| s.cell.lengths = vec![1e200; 2], "cell volume of inf");
+        refused(|s| s.cell.lengths = vec![1.5; 2], "less than two diameters");
+        refused(
+            |s| {
+                // Six disks of diameter 1 in a 2 × 2 cell: Φ = 1.18.
+                s.cell.lengths = vec![2.0; 2];
+                let p = &mut s.particles;
+                for k in 0..4 {
+                    p.radius.push(0.5);
+                    p.mass.push(1.0);
+                    p.position.push(vec![0.1 * k as f64, 1.0]);
+                    p.velocity.push(vec![0.0; 2]);
+                }
+            },
+            "Φ =",
+        );
         refused(
             |s| s.particles.position[1][0] = f64::NAN,
             "particles.position[1]",

@@ -673,6 +673,30 @@ fn fixed_rattlers_in_analysis() {
     assert_eq!(a.structure.gap_coordination_iii.as_ref().unwrap().y[0], 6.0);
 }
 
+/// A cohesive gas with one bonded pair: 198 rattlers and a backbone of 2. Variant II would
+/// let the rattlers fall through the empty cell for its whole step budget (45 s, found by
+/// tests/fuzz.rs); above `MAX_FIXED_RATTLER_FRACTION` it is skipped.
+#[test]
+fn variant_ii_is_skipped_without_a_backbone_to_speak_of() {
+    let mut rng = Lcg(5);
+    let mut p: Vec<Vec<f64>> = (0..198)
+        .map(|_| (0..2).map(|_| 30.0 * rng.next()).collect())
+        .collect();
+    p.push(vec![15.0, 15.0]);
+    p.push(vec![15.999, 15.0]);
+    let gas = snapshot(
+        vec![30.0; 2],
+        vec![0.5; 200],
+        p,
+        &[bond(198, 199, -1e-3)],
+        true,
+        Some(0.5),
+    );
+    let a = analyze(&gas, &Options::default());
+    assert!(a.rattlers > 100 && a.rattlers < 200, "{}", a.rattlers);
+    assert!(a.fixed_rattlers.is_none());
+}
+
 /// Foreign snapshots that are odd but pass `Snapshot::check` never panic: no contacts
 /// (every grain a rattler), zero radii, a degenerate cell, non-finite positions.
 #[test]

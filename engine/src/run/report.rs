@@ -17,6 +17,8 @@ pub struct Progress {
     pub checks: Checks,
     /// The stage's damped final phase is on (engine/src/run/relax.rs).
     pub relaxing: bool,
+    /// The time step.
+    pub dt: f64,
 }
 
 /// Equilibrium measures at one check, in units of the criteria.

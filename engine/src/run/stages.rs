@@ -360,6 +360,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     steps: sys.step - steps0,
                     checks: checks.clone(),
                     relaxing: watch.damping_on(),
+                    dt: sys.dt,
                 });
             }
             // Time step past stability: the fastest modes flip sign at every step (the

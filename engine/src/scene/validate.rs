@@ -44,6 +44,16 @@ impl fmt::Display for SceneError {
 
 impl std::error::Error for SceneError {}
 
+/// Thinnest initial gas accepted (tests/fuzz.rs: 1e-300 overflowed the cell grids).
+pub const MIN_INITIAL_PACKING_FRACTION: f64 = 1e-3;
+
+/// Range of the stiffness number κ (law and stage overrides).
+pub const KAPPA_MIN: f64 = 10.0;
+pub const KAPPA_MAX: f64 = 1e12;
+
+/// Below this `min_diameter` the run's cost is worth a warning ([`Scene::warnings`]).
+pub const SMALL_MIN_DIAMETER: f64 = 0.1;
+
 /// Largest Φ_I a random sequential placement reaches in reasonable time (RSA jamming limits:
 /// 0.547 for disks, 0.384 for spheres, a little less to leave room).
 pub fn max_random_packing_fraction(dimension: usize) -> f64 {
@@ -95,6 +105,18 @@ impl Scene {
                 Ok(())
             } else {
                 Err(err(field, format!("must lie in [{lo}, {hi}], got {x}")))
+            }
+        };
+        // κ sets the typical overlap h/a ~ 1/κ (AR07 (3), GRC07 §II.A); 1e-300 underflowed
+        // the stiffness to 0 and the time step to infinity (tests/fuzz.rs).
+        let stiffness = |field: &str, k: f64| -> Result<(), SceneError> {
+            if k.is_finite() && (KAPPA_MIN..=KAPPA_MAX).contains(&k) {
+                Ok(())
+            } else {
+                Err(err(
+                    field,
+                    format!("must lie in [{KAPPA_MIN}, {KAPPA_MAX:e}], got {k}: κ sets the typical overlap h/a ~ 1/κ (the papers use 10²–2·10⁵)"),
+                ))
             }
         };
         if self.name.trim().is_empty()
@@ -173,7 +195,7 @@ impl Scene {
                         "\"hertz-mindlin\" needs dimension = 3 (Hertz contacts are between spheres); use kind = \"linear\" for disks".into(),
                     ));
                 }
-                positive("law.kappa", *kappa)?;
+                stiffness("law.kappa", *kappa)?;
                 check_mu("law.mu", *mu)?;
                 in_range("law.zeta", *zeta, 0.0, 1.0)?;
                 if !(poisson.is_finite() && *poisson > -1.0 && *poisson < 0.5) {
@@ -217,7 +239,7 @@ impl Scene {
                 tangential_damping,
             } => {
                 in_range("law.tangential_damping", *tangential_damping, 0.0, 1.0)?;
-                positive("law.kappa", *kappa)?;
+                stiffness("law.kappa", *kappa)?;
                 check_mu("law.mu", *mu)?;
                 in_range("law.zeta", *zeta, 0.0, 1.0)?;
                 positive("law.kt_over_kn", *kt_over_kn)?;
@@ -248,11 +270,11 @@ impl Scene {
         match self.initial.arrangement {
             Arrangement::Random => {
                 let phi_max = max_random_packing_fraction(self.dimension);
-                if !(phi.is_finite() && phi > 0.0 && phi <= phi_max) {
+                if !(phi.is_finite() && phi >= MIN_INITIAL_PACKING_FRACTION && phi <= phi_max) {
                     return Err(err(
                         "initial.packing_fraction",
                         format!(
-                            "must lie in (0, {phi_max}]: a random sequential placement of {} cannot reach {phi}",
+                            "must lie in [{MIN_INITIAL_PACKING_FRACTION}, {phi_max}]: a random sequential placement of {} cannot reach {phi} (the papers start at 0.13–0.52; a thinner gas only costs compression time)",
                             if self.dimension == 2 { "disks" } else { "spheres" }
                         ),
                     ));
@@ -268,10 +290,10 @@ impl Scene {
                     ));
                 }
                 let fcc_max = std::f64::consts::PI / (3.0 * 2f64.sqrt());
-                if !(phi.is_finite() && phi > 0.0 && phi < fcc_max) {
+                if !(phi.is_finite() && phi >= MIN_INITIAL_PACKING_FRACTION && phi < fcc_max) {
                     return Err(err(
                         "initial.packing_fraction",
-                        format!("must lie in (0, {fcc_max:.4}) for an FCC lattice, got {phi}"),
+                        format!("must lie in [{MIN_INITIAL_PACKING_FRACTION}, {fcc_max:.4}) for an FCC lattice, got {phi}"),
                     ));
                 }
             }
@@ -388,8 +410,8 @@ impl Scene {
                     inertia_cap,
                     ..
                 } => {
-                    positive(&f("from"), *from)?;
-                    positive(&f("to"), *to)?;
+                    stiffness(&f("from"), *from)?;
+                    stiffness(&f("to"), *to)?;
                     check_pressure("pressure", *pressure)?;
                     check_factor(*factor)?;
                     positive(&f("inertia_cap"), *inertia_cap)?;
@@ -412,7 +434,7 @@ impl Scene {
                 check_mu(&f("mu"), mu)?;
             }
             if let Some(kappa) = step.kappa() {
-                positive(&f("kappa"), kappa)?;
+                stiffness(&f("kappa"), kappa)?;
             }
             if step.is_dem() {
                 positive(&f("max_time"), step.max_time())?;
@@ -479,6 +501,26 @@ impl Scene {
         }
         Ok(())
     }
+
+    /// Settings that are valid but costly, each a sentence naming the field: the time step
+    /// follows the lightest grain (mass ∝ d^dim), so `particles.min_diameter` = d_min makes it
+    /// d_min^(dim/2) of an equal-size scene's.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let dmin = self.particles.min_diameter;
+        if dmin < SMALL_MIN_DIAMETER {
+            let f = dmin.powf(-(self.dimension as f64) / 2.0);
+            let factor = if f < 1e4 {
+                format!("{f:.0}")
+            } else {
+                format!("{f:.1e}")
+            };
+            w.push(format!(
+                "particles.min_diameter = {dmin}: the time step follows the lightest grain, so this scene needs {factor}× the steps of an equal-size one (the papers use ≥ 0.5; below {SMALL_MIN_DIAMETER} this is rarely meant)"
+            ));
+        }
+        w
+    }
 }
 
 #[cfg(test)]
@@ -509,6 +551,35 @@ mod tests {
             (r.damping, r.tangential_zeta, r.settle_time),
             (1.0, 0.5, 10.0)
         );
+    }
+
+    /// tests/fuzz.rs: `kappa = 1e-300` underflowed the stiffness and tripped a debug
+    /// assertion on the time step.
+    #[test]
+    fn kappa_is_bounded() {
+        for bad in ["1e-300", "1.0", "1e300"] {
+            let e = err(&BASE.replace("kappa = 1e5", &format!("kappa = {bad}")));
+            assert_eq!(e.field, "law.kappa", "{e}");
+            assert!(e.message.contains("h/a ~ 1/κ"), "{e}");
+        }
+    }
+
+    /// Issue 18: a tiny `min_diameter` is accepted, with a word on what it costs.
+    #[test]
+    fn a_tiny_min_diameter_is_warned_about() {
+        let s = Scene::from_toml(BASE, Path::new("s.toml")).unwrap();
+        assert!(s.warnings().is_empty());
+        let tiny = BASE.replace("min_diameter = 0.5", "min_diameter = 0.01");
+        let s = Scene::from_toml(&tiny, Path::new("s.toml")).unwrap();
+        let w = s.warnings().join("\n");
+        // 2D: mass ∝ d², time step ∝ d_min, so 100 times the steps.
+        assert!(
+            w.contains("particles.min_diameter = 0.01") && w.contains(" 100×"),
+            "{w}"
+        );
+        let mut tinier = s.clone();
+        tinier.particles.min_diameter = 1e-6;
+        assert!(tinier.warnings()[0].contains("1.0e6×"));
     }
 
     #[test]
@@ -572,6 +643,8 @@ mod tests {
         let e = err(&BASE.replace("preset = \"grc07\"", "preset = \"grc09\""));
         assert!(e.message.contains("grc08"), "{e}");
         let e = err(&BASE.replace("packing_fraction = 0.36", "packing_fraction = 0.6"));
+        assert_eq!(e.field, "initial.packing_fraction");
+        let e = err(&BASE.replace("packing_fraction = 0.36", "packing_fraction = 1e-300"));
         assert_eq!(e.field, "initial.packing_fraction");
         // Cohesion-scaled criteria need a cohesive law; zero pressure needs cohesion.
         let no_coh = BASE.replace("cohesion = { d0 = 1e-3 }\n", "");

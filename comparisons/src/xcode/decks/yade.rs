@@ -293,24 +293,30 @@ with open('final.cell', 'w') as f:
     f.write('time %r\n' % O.time)
 with open('final.bodies', 'w') as f:
     f.write('# id radius mass x y z vx vy vz wx wy wz\n')
+    rows = 0
     for b in O.bodies:
+        rows += 1
         v = b.state.vel - grad * b.state.pos  # fluctuating velocity
         p = O.cell.wrap(b.state.pos)
         w = b.state.angVel
         vals = (b.shape.radius, b.state.mass, p[0], p[1], p[2], v[0], v[1], v[2], w[0], w[1], w[2])
         f.write('%d %s\n' % (b.id, ' '.join(repr(float(x)) for x in vals)))
+    f.write('# rows %d\n' % rows)  # a file cut short lacks it
 with open('final.interactions', 'w') as f:
     # fn: total normal force, repulsive positive; fn_elastic: kno h^1.5;
     # tx ty tz: shear force on id2 (the force on id2 is fn n + t, n from id1 to id2).
     f.write('# id1 id2 fn fn_elastic tx ty tz\n')
+    rows = 0
     for i in O.interactions:
         if not i.isReal:
             continue
+        rows += 1
         h = i.geom.penetrationDepth
         fn = i.phys.normalForce.dot(i.geom.normal)
         fe = i.phys.kno * max(h, 0.0) ** 1.5
         t = i.phys.shearForce
         f.write('%d %d %r %r %r %r %r\n' % (i.id1, i.id2, fn, fe, t[0], t[1], t[2]))
+    f.write('# rows %d\n' % rows)
 final = 'equilibrium' if statuses and all(s == 'equilibrium' for s in statuses) else 'time-limit'
 with open('final.status', 'w') as f:
     f.write(final + '\n')

@@ -375,8 +375,13 @@ pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
         {
             sec.columns = rest.split_whitespace().map(str::to_string).collect();
             for (at, row) in lines.by_ref() {
+                // The last frame runs to the end of the file: any other item is damage
+                // (tests/fuzz.rs: a header line swapped into the rows cut the frame short).
                 if row.starts_with("ITEM:") {
-                    break;
+                    return Err(ImportError::new(
+                        path,
+                        format!("line {at}: {row:?} among the rows of the last frame: the dump is damaged; rerun the code or restore the file"),
+                    ));
                 }
                 if row.trim().is_empty() {
                     continue;
@@ -408,16 +413,20 @@ pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
                 sec.rows.push(v);
             }
             // Issue 18: a dump cut at a line end used to import silently (z halved).
-            if let Some((count, at)) = promised {
-                if count != sec.rows.len() {
-                    return Err(ImportError::new(
-                        path,
-                        format!(
-                            "the last frame promises {count} rows (line {at}, `ITEM: NUMBER OF …`) but holds {}: the dump is cut short or damaged; rerun the code or restore the file",
-                            sec.rows.len()
-                        ),
-                    ));
-                }
+            let Some((count, at)) = promised else {
+                return Err(ImportError::new(
+                    path,
+                    "the last frame has no `ITEM: NUMBER OF …` line before its rows (LAMMPS writes one): the dump is damaged",
+                ));
+            };
+            if count != sec.rows.len() {
+                return Err(ImportError::new(
+                    path,
+                    format!(
+                        "the last frame promises {count} rows (line {at}, `ITEM: NUMBER OF …`) but holds {}: the dump is cut short or damaged; rerun the code or restore the file",
+                        sec.rows.len()
+                    ),
+                ));
             }
             break;
         }

@@ -7,7 +7,8 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// A whitespace table with a `# col col …` header: column names and numeric rows with their
-/// line numbers.
+/// line numbers. The file ends with `# rows N`, the count of its rows, so that a file cut short
+/// is told from a complete one.
 struct Table {
     columns: Vec<String>,
     rows: Vec<(usize, Vec<f64>)>,
@@ -18,14 +19,24 @@ impl Table {
         let text = std::fs::read_to_string(path).map_err(|e| ImportError::new(path, e))?;
         let mut columns: Vec<String> = Vec::new();
         let mut rows = Vec::new();
+        let mut footer: Option<(usize, &str)> = None;
         for (k, line) in text.lines().enumerate() {
             let line_no = k + 1;
             let t = line.trim();
             if t.is_empty() {
                 continue;
             }
+            if let Some((at, _)) = footer {
+                return Err(ImportError::new(
+                    path,
+                    format!("line {line_no}: more after the closing `# rows` line {at}: {t:?}"),
+                ));
+            }
             if let Some(h) = t.strip_prefix('#') {
-                if columns.is_empty() && rows.is_empty() {
+                let mut w = h.split_whitespace();
+                if w.next() == Some("rows") && (!columns.is_empty() || !rows.is_empty()) {
+                    footer = Some((line_no, w.next().unwrap_or("")));
+                } else if columns.is_empty() && rows.is_empty() {
                     columns = h.split_whitespace().map(str::to_string).collect();
                 }
                 continue;
@@ -60,7 +71,23 @@ impl Table {
             }
             rows.push((line_no, v));
         }
-        Ok(Table { columns, rows })
+        match footer {
+            None => Err(ImportError::new(
+                path,
+                format!(
+                    "no closing `# rows N` line after its {} rows: the file was cut short, or written by an export without it (docs/external-formats/yade.md)",
+                    rows.len()
+                ),
+            )),
+            Some((at, count)) if count.parse::<usize>() != Ok(rows.len()) => Err(ImportError::new(
+                path,
+                format!(
+                    "line {at}: `# rows {count}` promises {count} rows, but the file holds {}",
+                    rows.len()
+                ),
+            )),
+            Some(_) => Ok(Table { columns, rows }),
+        }
     }
 
     fn col(&self, path: &Path, name: &str) -> Result<usize, ImportError> {
@@ -103,6 +130,7 @@ fn read_cell(path: &Path) -> Result<(Vec<f64>, u64, f64), ImportError> {
         };
         let vals: Vec<&str> = w.collect();
         match key {
+            "lengths" if lengths.is_some() => return Err(bad(&"a second `lengths` line")),
             "lengths" => {
                 let v: Vec<f64> = vals
                     .iter()
@@ -255,12 +283,13 @@ mod tests {
             p.join("final.bodies"),
             "# id radius mass x y z vx vy vz wx wy wz\n\
              0 0.5 1 1 1 1 0 0 0 0 0 0\n\
-             1 0.5 1 1.9 1 1 0 0 0 0 0 0\n",
+             1 0.5 1 1.9 1 1 0 0 0 0 0 0\n\
+             # rows 2\n",
         )
         .unwrap();
         std::fs::write(
             p.join("final.interactions"),
-            "# id1 id2 fn fn_elastic tx ty tz\n0 1 2 1.5 0 0.1 0\n",
+            "# id1 id2 fn fn_elastic tx ty tz\n0 1 2 1.5 0 0.1 0\n# rows 1\n",
         )
         .unwrap();
         std::fs::write(p.join("final.status"), "equilibrium\n").unwrap();
@@ -275,7 +304,7 @@ mod tests {
 
         std::fs::write(
             p.join("final.interactions"),
-            "# id1 id2 fn fn_elastic tx ty tz\n0 1 2 1.5 0 0.1\n",
+            "# id1 id2 fn fn_elastic tx ty tz\n0 1 2 1.5 0 0.1\n# rows 1\n",
         )
         .unwrap();
         let e = read_dir(p, &meta()).unwrap_err().to_string();
@@ -283,8 +312,50 @@ mod tests {
             e.contains("final.interactions") && e.contains("line 2"),
             "{e}"
         );
-        std::fs::write(p.join("final.interactions"), "0 7 2 1.5 0 0.1 0\n").unwrap();
+        std::fs::write(
+            p.join("final.interactions"),
+            "0 7 2 1.5 0 0.1 0\n# rows 1\n",
+        )
+        .unwrap();
         let e = read_dir(p, &meta()).unwrap_err().to_string();
         assert!(e.contains("line 1") && e.contains("id 7"), "{e}");
+    }
+
+    /// Issue 18: a file cut at a line end, or one whose footer disagrees, is refused.
+    #[test]
+    fn a_table_cut_short_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("final.interactions");
+        let head = "# id1 id2 fn fn_elastic tx ty tz\n0 1 2 1.5 0 0.1 0\n1 2 1 1 0 0 0\n";
+        for (text, expect) in [
+            (
+                head.to_string(),
+                "no closing `# rows N` line after its 2 rows",
+            ),
+            (
+                format!("{head}# rows 3\n"),
+                "promises 3 rows, but the file holds 2",
+            ),
+            (format!("{head}# rows two\n"), "promises two rows"),
+            (
+                format!("{head}# rows 2\n2 3 1 1 0 0 0\n"),
+                "more after the closing",
+            ),
+        ] {
+            std::fs::write(&path, text).unwrap();
+            let e = Table::read(&path, &INTERACTION_COLUMNS)
+                .err()
+                .expect("refused")
+                .to_string();
+            assert!(
+                e.contains(expect) && e.contains("final.interactions"),
+                "{e}"
+            );
+        }
+        std::fs::write(&path, format!("{head}# rows 2\n")).unwrap();
+        assert_eq!(
+            Table::read(&path, &INTERACTION_COLUMNS).unwrap().rows.len(),
+            2
+        );
     }
 }
