@@ -79,7 +79,7 @@ fn bad_scene_names_file_and_field_and_leaves_results_untouched() {
         .code(2)
         .stderr(predicate::str::contains("bad.toml"))
         .stderr(predicate::str::contains("law.kappa"))
-        .stderr(predicate::str::contains("> 0"));
+        .stderr(predicate::str::contains("must lie in [10, 1e12]"));
     assert_eq!(std::fs::read_to_string(&snap).unwrap(), "previous result");
 
     let unknown = scene_file(
