@@ -196,6 +196,10 @@ fn damaged_external_dumps_are_refused() {
         }
         tmp
     };
+    let lines_of = |path: &Path| -> Vec<String> {
+        let text = std::fs::read_to_string(path).unwrap();
+        text.lines().map(str::to_string).collect()
+    };
     for code in ["lammps", "lammps-2025", "liggghts"] {
         let tmp = copy(code);
         let contacts = tmp.path().join("final.contacts");
@@ -210,11 +214,7 @@ fn damaged_external_dumps_are_refused() {
         // tests/fuzz.rs: the `NUMBER OF ENTRIES` line swapped into the rows cut the frame.
         let tmp = copy(code);
         let contacts = tmp.path().join("final.contacts");
-        let mut lines: Vec<String> = std::fs::read_to_string(&contacts)
-            .unwrap()
-            .lines()
-            .map(str::to_string)
-            .collect();
+        let mut lines = lines_of(&contacts);
         assert!(lines[2].starts_with("ITEM: NUMBER OF"));
         lines.swap(2, 300);
         std::fs::write(&contacts, lines.join("\n") + "\n").unwrap();
@@ -224,11 +224,7 @@ fn damaged_external_dumps_are_refused() {
 
         let tmp = copy(code);
         let contacts = tmp.path().join("final.contacts");
-        let mut lines: Vec<String> = std::fs::read_to_string(&contacts)
-            .unwrap()
-            .lines()
-            .map(str::to_string)
-            .collect();
+        let mut lines = lines_of(&contacts);
         let mut row: Vec<&str> = lines[20].split_whitespace().collect();
         row[3] = "nan";
         lines[20] = row.join(" ");

@@ -279,21 +279,25 @@ fn invariants(snap: &Snapshot) -> Result<(), String> {
     Ok(())
 }
 
-fn scene_bases() -> Vec<(String, String)> {
-    let dir = root().join("reference-inputs/scenes");
-    let mut v: Vec<(String, String)> = std::fs::read_dir(&dir)
+/// The files of `dir` whose name ends in `suffix`, as (name, text), sorted by name.
+fn texts_in(dir: &Path, suffix: &str) -> Vec<(String, String)> {
+    let mut v: Vec<(String, String)> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
         .map(|p| {
             (
                 p.file_name().unwrap().to_string_lossy().into_owned(),
                 std::fs::read_to_string(&p).unwrap(),
             )
         })
+        .filter(|(name, _)| name.ends_with(suffix))
         .collect();
     v.sort();
     v
+}
+
+fn scene_bases() -> Vec<(String, String)> {
+    texts_in(&root().join("reference-inputs/scenes"), ".toml")
 }
 
 /// Scene TOML: parsed and validated; an accepted small scene is also run briefly (the panics
@@ -416,20 +420,7 @@ fn fuzz_checkpoint(tmp: &Path, cases: u32, seed: u64) {
 /// snapshot it builds keeps the invariants and lists as many contacts as the header promises.
 fn fuzz_dumps(code: Code, sub: &str, tmp: &Path, cases: u32, seed: u64) -> Tally {
     let from = root().join("tests/fixtures/xcode-smoke").join(sub);
-    let files: Vec<(String, String)> = {
-        let mut v: Vec<(String, String)> = std::fs::read_dir(&from)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .map(|p| {
-                (
-                    p.file_name().unwrap().to_string_lossy().into_owned(),
-                    std::fs::read_to_string(&p).unwrap(),
-                )
-            })
-            .collect();
-        v.sort();
-        v
-    };
+    let files = texts_in(&from, "");
     let dir = tmp.join(sub);
     fuzz(sub, &files, cases, seed, |name, bytes| {
         std::fs::create_dir_all(&dir).unwrap();

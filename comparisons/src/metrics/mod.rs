@@ -377,8 +377,7 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         .filter(|(_, &k)| k)
         .map(|(p, _)| *p)
         .collect();
-    let rattler_share = r.is_rattler.iter().filter(|&&x| x).count() as f64 / n.max(1) as f64;
-    let fixed = if opts.fix_rattlers && rattler_share <= MAX_FIXED_RATTLER_FRACTION {
+    let fixed = if opts.fix_rattlers && x0 <= MAX_FIXED_RATTLER_FRACTION {
         fix_rattlers(lengths, position, radius, &r.is_rattler, &kept, opts.seed)
     } else {
         None
