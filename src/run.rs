@@ -175,6 +175,9 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                 });
             }
         }
+        if let Some(w) = unwrapped_warning(p) {
+            bar.suspend(|| eprintln!("warning: {w}"));
+        }
         if plain && last_line.elapsed().as_secs_f64() >= 5.0 {
             last_line = std::time::Instant::now();
             eprintln!(
@@ -369,6 +372,29 @@ fn clusters_text(c: &Checks) -> String {
 }
 
 /// P/P₀ against a positive target, else P itself (fixed cell, or P* = 0).
+/// The warning for a stage that frees the cell at zero pressure while the grains still move,
+/// around a network that does not wrap it along some axis: no contact holds the cell there.
+fn unwrapped_warning(p: &Progress) -> Option<String> {
+    let wrapped = p.wrapped_axes.as_ref()?;
+    let c = &p.checks;
+    if c.pressure_target != 0.0 || c.kinetic_ratio <= 1.0 || wrapped.iter().all(|&w| w) {
+        return None;
+    }
+    let axes: Vec<&str> = wrapped
+        .iter()
+        .zip(["x", "y", "z"])
+        .filter(|(w, _)| !**w)
+        .map(|(_, a)| a)
+        .collect();
+    Some(format!(
+        "stage {} ({}) frees the cell at zero pressure with the grains still moving (kinetic energy {:.1e}× its criterion) around a network that does not wrap the cell along {}: no contact holds the cell length there, and it drifts open with the grains' kinetic stress; bring the grains to rest in the fixed cell first (a `fixed-volume` stage with `relax`, as GRC07 §III.B.1 frees the cell only once the aggregate is at rest)",
+        p.step_index + 1,
+        p.step_kind,
+        c.kinetic_ratio,
+        axes.join(" and ")
+    ))
+}
+
 fn pressure_text(c: &Checks) -> String {
     if c.pressure_target > 0.0 {
         format!("P/P₀={:.4}", c.pressure / c.pressure_target)

@@ -611,6 +611,68 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
         "{err}"
     );
 
+    // A cohesive gas freed at P* = 0: its network wraps no axis and its grains move, so the
+    // cell drifts (GRC07 series B drifted from Φ = 0.26 to 0.13 without a word).
+    let drift = scene_file(
+        dir.path(),
+        "drift.toml",
+        r#"
+name = "drift"
+dimension = 2
+seed = 1
+[particles]
+count = 60
+min_diameter = 0.5
+[law]
+kind = "linear"
+kappa = 1e3
+mu = 0.5
+zeta = 0.8
+cohesion = { d0 = 1e-3 }
+[initial]
+packing_fraction = 0.3
+rms_velocity = 0.3
+[[protocol]]
+kind = "compress"
+pressure = 0.0
+inertia_cap = 0.05
+max_time = 1.0
+criteria = { preset = "grc07" }
+"#,
+    );
+    let out = grainbench()
+        .arg("run")
+        .arg(&drift)
+        .args(["-q", "-o"])
+        .arg(dir.path().join("drift"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("warning: stage 1 (compress) frees the cell at zero pressure")
+            && err.contains("does not wrap the cell along x and y")
+            && err.contains("fixed-volume"),
+        "{err}"
+    );
+    // Under a positive pressure a gas that wraps nothing is normal: no warning.
+    let squeeze = scene_file(
+        dir.path(),
+        "squeeze.toml",
+        &std::fs::read_to_string(&drift)
+            .unwrap()
+            .replace("pressure = 0.0", "pressure = 0.01"),
+    );
+    let out = grainbench()
+        .arg("run")
+        .arg(&squeeze)
+        .args(["-q", "-o"])
+        .arg(dir.path().join("squeeze"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !err.contains("wrap"), "{err}");
+
     // `mu = "abc"` pointed at `[law]` without naming the field.
     let abc = scene_file(
         dir.path(),

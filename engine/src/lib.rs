@@ -3,7 +3,8 @@
 //! 2007/2008, "GRC07", "GRC08"), one code base for 2D and 3D.
 //!
 //! Layout: [`geometry`] (2D/3D abstraction), [`cell`] (periodic cell and barostat, AR07 (6)–(8)),
-//! [`contact`] (contact laws), [`neighbor`] (cell lists + Verlet skin), [`system`] (state and
+//! [`contact`] (contact laws), [`neighbor`] (cell lists + Verlet skin), [`network`] (the axes an
+//! interaction network wraps), [`system`] (state and
 //! integrator), [`init`] (random gas), [`scene`] (scene files), [`run`] (protocols, equilibrium
 //! criteria, blow-up detection, checkpoints), [`snapshot`] (on-disk configurations), [`library`] (embedded
 //! scenes), [`protocols`] (event-driven hard grains, Lubachevsky–Stillinger growth, FCC).
@@ -14,6 +15,7 @@ pub mod geometry;
 pub mod init;
 pub mod library;
 pub mod neighbor;
+pub mod network;
 pub mod protocols;
 pub mod run;
 pub mod scene;

@@ -61,6 +61,7 @@ use bond_order::{bond_order, BondOrder, DEFAULT_CUTOFF};
 use fixed_rattlers::{fix_rattlers, FixedRattlers, DEFAULT_SEED};
 use force_distribution::force_stats;
 pub use force_distribution::{ForceStats, PopulationStats};
+use grainbench_engine::network::wrapped_axes;
 use grainbench_engine::snapshot::{Contact, Snapshot};
 use math::mean;
 pub use pressure::{contact_pressure, Ar07Eq22, Grc07Eq18, Pressure, Rumpf};
@@ -183,7 +184,7 @@ impl Analysis {
     /// `phi`, `z`, `z_star`, `x0`, `xk1` (cohesive only), `xk2`…`xk12` (x_k, variant I), `xk2_II`…`xk12_II`,
     /// `mean_N`, `Z2`, `Z5_3`, `X1`, `M1`, `M2`, `N_2`, `X1_2`, `M1_2`, `M2_2`, `N_3`, `X1_3`,
     /// `M1_3`, `M2_3`, `Q4`, `Q6`, `Q4loc`, `Q6loc`, `Z_bond`, `Z_cr`, `Q6loc_cr`, `x_cr`,
-    /// `n_cr`, `z_plus`, `z_minus`, `z_zero`, `clusters`, `N_plus`, `N_plus_rms`, `N_minus`,
+    /// `n_cr`, `z_plus`, `z_minus`, `z_zero`, `clusters`, `wrapped_axes`, `N_plus`, `N_plus_rms`, `N_minus`,
     /// `N_minus_rms` (GRC07 T.VI, units of F0), `pressure` (measured).
     pub fn metric_values(&self) -> Vec<(String, f64)> {
         let mut v: Vec<(String, f64)> = Vec::new();
@@ -244,6 +245,7 @@ impl Analysis {
             put("z_minus", Some(s.z_minus));
             put("z_zero", Some(s.z_zero));
             put("clusters", Some(s.clusters as f64));
+            put("wrapped_axes", Some(s.wrapped_axes as f64));
             put("N_plus", s.mean_repulsive);
             put("N_plus_rms", s.rms_repulsive);
             put("N_minus", s.mean_attractive);
@@ -267,6 +269,10 @@ pub struct CohesiveSplit {
     /// Clusters: connected groups of grains linked by interactions, among the grains with at
     /// least one (1 for a packing that holds together; GRC07 §III.B method 2 aggregates to 1).
     pub clusters: usize,
+    /// Axes of the cell along which the interaction network wraps (connects to its own periodic
+    /// image, [`grainbench_engine::network::wrapped_axes`]): all of them for a network that holds
+    /// the cell at P* = 0 (GRC07 §III.B.1); fewer, and the cell length along the others is free.
+    pub wrapped_axes: usize,
     /// N+ and N+^(2): mean and quadratic mean of repulsive forces.
     pub mean_repulsive: Option<f64>,
     pub rms_repulsive: Option<f64>,
@@ -342,6 +348,14 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
             z_zero: per_grain(nc - rep.len() - att.len()),
             distant: backbone.iter().filter(|c| c.gap > 0.0).count(),
             clusters: clusters(n, &pairs),
+            wrapped_axes: wrapped_axes(
+                &snap.cell.lengths,
+                n,
+                counted.iter().map(|c| (c.i, c.j, c.branch.as_slice())),
+            )
+            .into_iter()
+            .filter(|&w| w)
+            .count(),
             mean_repulsive: mean(rep.iter().copied()),
             rms_repulsive: rms(&rep),
             mean_attractive: mean(att.iter().copied()),

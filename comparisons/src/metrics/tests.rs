@@ -225,8 +225,10 @@ fn cohesive_split() {
     assert_close!(s.z_zero, 0.75, 1e-15);
     assert_close!(s.z_plus + s.z_minus + s.z_zero, a.z, 1e-15);
     assert_eq!(s.distant, 1);
-    // Grains 0–6 in one chain; the isolated grain 7 is no cluster.
+    // Grains 0–6 in one chain; the isolated grain 7 is no cluster. The chain stops short of
+    // its own image: it wraps no axis.
     assert_eq!(s.clusters, 1);
+    assert_eq!(s.wrapped_axes, 0);
     assert_eq!(s.mean_repulsive, Some(0.5));
     assert_close!(s.mean_attractive.unwrap(), 0.4, 1e-15);
     assert_close!(s.rms_attractive.unwrap(), (0.17f64).sqrt(), 1e-15);
@@ -443,6 +445,7 @@ fn canonical_keys() -> Vec<String> {
             "z_minus",
             "z_zero",
             "clusters",
+            "wrapped_axes",
             "N_plus",
             "N_plus_rms",
             "N_minus",
@@ -766,4 +769,28 @@ fn documented_example_is_valid() {
     assert!(a.pressure.exact_rel_diff.unwrap().abs() < 1e-12);
     // Frictional rule: two grains with one contact each are rattlers, N_c = 0.
     assert_eq!((a.rattlers, a.contacts), (2, 0));
+}
+
+/// GRC07 §III.B.1: a cohesive square lattice wraps both axes of its cell; without the bonds
+/// that close it across x, only y.
+#[test]
+fn wrapped_axes_of_a_cohesive_network() {
+    let (l, r, p, b) = lattice(2, 4, 0.99, 0.5, -0.1);
+    let wraps = |bonds: &[Bond]| {
+        let snap = snapshot(l.clone(), r.clone(), p.clone(), bonds, true, Some(0.5));
+        let a = analyze(&snap, &Options::default());
+        let v = a.metric_values();
+        let w = a.cohesive_split.unwrap().wrapped_axes;
+        assert_eq!(value(&v, "wrapped_axes"), Some(w as f64));
+        w
+    };
+    assert_eq!(wraps(&b), 2);
+    // Bonds from x = 3 to x = 0 cross the boundary along x.
+    let open: Vec<Bond> = b
+        .iter()
+        .filter(|b| !(p[b.i][0] > 2.0 && p[b.j][0] < 1.0))
+        .cloned()
+        .collect();
+    assert_eq!(b.len() - open.len(), 4);
+    assert_eq!(wraps(&open), 1);
 }

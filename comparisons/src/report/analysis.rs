@@ -127,6 +127,11 @@ pub fn to_markdown(a: &Analysis) -> String {
             s.clusters.to_string(),
             "groups of grains linked by interactions",
         );
+        row(
+            "wrapped axes",
+            format!("{} of {}", s.wrapped_axes, a.dimension),
+            "axes along which the interaction network wraps the cell (GRC07 §III.B.1)",
+        );
         row("N+", opt(s.mean_repulsive), "mean repulsive force");
         row("N+^(2)", opt(s.rms_repulsive), "quadratic mean");
         row("N−", opt(s.mean_attractive), "mean |attractive force|");

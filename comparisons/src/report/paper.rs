@@ -122,6 +122,7 @@ pub const METRIC_KEYS: &[(&str, &str)] = &[
     ("z_minus", "coordination number of attractive contacts (GRC07 T.VI)"),
     ("z_zero", "coordination number of contacts below 1e-4 F0 (GRC07 T.VI)"),
     ("clusters", "clusters of grains linked by interactions"),
+    ("wrapped_axes", "axes along which the interaction network wraps the cell"),
     ("d_F", "fractal dimension from the fit of I(k) by GRC07 (28)"),
     ("xi", "fractal blob size ξ/a from GRC07 (28)"),
     // Quantities outside the fixed list.

@@ -19,6 +19,9 @@ pub struct Progress {
     pub relaxing: bool,
     /// The time step.
     pub dt: f64,
+    /// At the first check of a stress-controlled stage: the axes the interaction network wraps
+    /// ([`crate::network::wrapped_axes`]); `None` at other checks.
+    pub wrapped_axes: Option<Vec<bool>>,
 }
 
 /// Equilibrium measures at one check, in units of the criteria.

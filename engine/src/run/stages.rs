@@ -16,6 +16,7 @@ use crate::cell::Control;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
 use crate::init::maxwell_velocities;
+use crate::network;
 use crate::protocols::event_driven::HardSpheres;
 use crate::scene::{Scene, Step};
 use crate::snapshot::Snapshot;
@@ -317,6 +318,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         let mut prev_force: Vec<D::V> = Vec::new();
         let mut prev_torque: Vec<D::Ang> = Vec::new();
         let mut flips = 0u32;
+        let mut first_check = true;
         loop {
             let damping = watch.damping_factor(sys.dt);
             for m in 0..num.check_every {
@@ -351,6 +353,20 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             let inter = sys.interactions();
             checks = measure(sys, &num, &inter);
             if let Some(cb) = opts.progress.as_mut() {
+                let stressed = matches!(sys.cell.control, Control::Stress { .. });
+                let wrapped_axes = (first_check && stressed).then(|| {
+                    let l = sys.cell.l.to_vec();
+                    let branches: Vec<Vec<f64>> = inter.iter().map(|c| c.branch.to_vec()).collect();
+                    network::wrapped_axes(
+                        &l,
+                        sys.len(),
+                        inter
+                            .iter()
+                            .zip(&branches)
+                            .map(|(c, b)| (c.i, c.j, b.as_slice())),
+                    )
+                });
+                first_check = false;
                 cb(&Progress {
                     step_index: k,
                     step_count: stage_count,
@@ -361,6 +377,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     checks: checks.clone(),
                     relaxing: watch.damping_on(),
                     dt: sys.dt,
+                    wrapped_axes,
                 });
             }
             // Time step past stability: the fastest modes flip sign at every step (the

@@ -463,6 +463,16 @@ impl Scene {
                         ));
                     }
                 }
+                let zero_pressure = matches!(
+                    step,
+                    Step::Compress { pressure, .. } | Step::KappaRamp { pressure, .. } if *pressure == 0.0
+                );
+                if c.scale == ForceScale::Pressure && zero_pressure {
+                    return Err(err(
+                        &f("criteria.scale"),
+                        "\"pressure\" measures the criteria in units of the pressure, here 0: no state could meet them; use criteria = { preset = \"grc07\" } (scale \"cohesion\", units of F0)".into(),
+                    ));
+                }
                 if c.scale == ForceScale::Cohesion && !cohesive {
                     return Err(err(
                         &f("criteria.scale"),
@@ -636,6 +646,12 @@ mod tests {
         assert_eq!(e.field, "law.cohesion.d0");
         let e = err(&BASE.replace("pressure = 0.01", "pressure = -1"));
         assert_eq!(e.field, "protocol[0].pressure");
+        // Criteria in units of a zero pressure: every ratio infinite, reported as a blow-up.
+        let e = err(&BASE
+            .replace("pressure = 0.01", "pressure = 0.0")
+            .replace("preset = \"grc07\"", "preset = \"ar07\""));
+        assert_eq!(e.field, "protocol[0].criteria.scale", "{e}");
+        assert!(e.message.contains("grc07"), "{e}");
         let e = err(&BASE.replace("dimension = 2", "dimension = 4"));
         assert_eq!(e.field, "dimension");
         let e = err(&BASE.replace("mu = 0.5", "mu = \"lots\""));
@@ -653,6 +669,12 @@ mod tests {
             .replace("pressure = 0.01", "pressure = 0.0")
             .replace("cohesion = { d0 = 1e-3 }\n", ""));
         assert_eq!(e.field, "protocol[0].pressure");
+        // Criteria in units of a zero pressure: every ratio infinite, reported as a blow-up.
+        let e = err(&BASE
+            .replace("pressure = 0.01", "pressure = 0.0")
+            .replace("preset = \"grc07\"", "preset = \"ar07\""));
+        assert_eq!(e.field, "protocol[0].criteria.scale", "{e}");
+        assert!(e.message.contains("grc07"), "{e}");
         // Hertz needs spheres.
         let e = err(&BASE
             .replace("kind = \"linear\"", "kind = \"hertz-mindlin\"")

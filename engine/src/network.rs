@@ -1,0 +1,145 @@
+//! Connectivity of an interaction network in the periodic cell: the axes it wraps.
+
+/// Axes along which the network of `edges` — `(i, j, branch)` with the branch r_j − r_i taken
+/// to the nearest image — wraps the periodic cell of sides `lengths`: some closed path of
+/// interactions crosses the cell a net non-zero number of times along that axis.
+///
+/// A network that does not wrap along an axis cannot carry stress along it at any cell length:
+/// under a prescribed stress (P* = 0 in GRC07 §III.B.1) nothing holds the cell there, and the
+/// cell drifts with the kinetic stress of the grains.
+///
+/// # Panics
+/// If an edge names a grain ≥ `n` or has a branch shorter than `lengths`.
+pub fn wrapped_axes<'a>(
+    lengths: &[f64],
+    n: usize,
+    edges: impl IntoIterator<Item = (usize, usize, &'a [f64])>,
+) -> Vec<bool> {
+    let d = lengths.len();
+    // Adjacency in compressed rows: (neighbour, edge index, sign of the branch).
+    let edges: Vec<(usize, usize, &[f64])> = edges.into_iter().collect();
+    let mut start = vec![0usize; n + 1];
+    for &(i, j, _) in &edges {
+        start[i + 1] += 1;
+        start[j + 1] += 1;
+    }
+    for k in 0..n {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut adj = vec![(0usize, 0usize, 1.0f64); start[n]];
+    for (e, &(i, j, _)) in edges.iter().enumerate() {
+        adj[fill[i]] = (j, e, 1.0);
+        fill[i] += 1;
+        adj[fill[j]] = (i, e, -1.0);
+        fill[j] += 1;
+    }
+    // Breadth-first walk: each grain gets an unwrapped position relative to the first grain
+    // of its cluster; an edge closing a loop whose branches sum to a non-zero lattice vector
+    // wraps the cell.
+    let mut offset: Vec<Option<Vec<f64>>> = vec![None; n];
+    let mut wraps = vec![false; d];
+    let mut queue = std::collections::VecDeque::new();
+    for first in 0..n {
+        if offset[first].is_some() {
+            continue;
+        }
+        offset[first] = Some(vec![0.0; d]);
+        queue.push_back(first);
+        while let Some(i) = queue.pop_front() {
+            let oi = offset[i].clone().expect("queued grains are placed");
+            for &(j, e, sign) in &adj[start[i]..start[i + 1]] {
+                let reached: Vec<f64> = (0..d).map(|a| oi[a] + sign * edges[e].2[a]).collect();
+                match &offset[j] {
+                    None => {
+                        offset[j] = Some(reached);
+                        queue.push_back(j);
+                    }
+                    Some(oj) => {
+                        for a in 0..d {
+                            if ((reached[a] - oj[a]) / lengths[a]).round() != 0.0 {
+                                wraps[a] = true;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    wraps
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A ring of `k` grains at spacing 1 along x in a cell of side `k` (each a neighbour of the
+    /// next, the last of the first through the boundary).
+    fn ring(k: usize) -> Vec<(usize, usize, Vec<f64>)> {
+        (0..k).map(|i| (i, (i + 1) % k, vec![1.0, 0.0])).collect()
+    }
+
+    fn axes(lengths: &[f64], n: usize, edges: &[(usize, usize, Vec<f64>)]) -> Vec<bool> {
+        wrapped_axes(
+            lengths,
+            n,
+            edges.iter().map(|(i, j, b)| (*i, *j, b.as_slice())),
+        )
+    }
+
+    #[test]
+    fn a_chain_through_the_boundary_wraps_its_axis_only() {
+        assert_eq!(axes(&[6.0, 10.0], 6, &ring(6)), [true, false]);
+        // The same chain with one link missing spans the cell but does not wrap it.
+        assert_eq!(axes(&[6.0, 10.0], 6, &ring(6)[..5]), [false, false]);
+    }
+
+    #[test]
+    fn a_finite_loop_does_not_wrap() {
+        // A triangle well inside the cell, listed in both orientations.
+        let tri = [
+            (0, 1, vec![1.0, 0.0]),
+            (2, 1, vec![0.5, -0.8]),
+            (2, 0, vec![-0.5, -0.8]),
+        ];
+        assert_eq!(axes(&[10.0, 10.0], 3, &tri), [false, false]);
+    }
+
+    #[test]
+    fn a_square_lattice_wraps_both_axes_and_a_cubic_one_all_three() {
+        let (k, mut edges) = (4usize, Vec::new());
+        for x in 0..k {
+            for y in 0..k {
+                let i = x * k + y;
+                edges.push((i, ((x + 1) % k) * k + y, vec![1.0, 0.0]));
+                edges.push((i, x * k + (y + 1) % k, vec![0.0, 1.0]));
+            }
+        }
+        assert_eq!(axes(&[4.0, 4.0], k * k, &edges), [true, true]);
+        // Cut every x bond across the boundary: stripes along x no longer close.
+        let cut: Vec<_> = edges
+            .iter()
+            .filter(|(i, j, b)| !(b[0] == 1.0 && j < i))
+            .cloned()
+            .collect();
+        assert_eq!(axes(&[4.0, 4.0], k * k, &cut), [false, true]);
+        let cube: Vec<_> = (0..27usize)
+            .flat_map(|i| {
+                let (x, y, z) = (i / 9, (i / 3) % 3, i % 3);
+                [
+                    (i, ((x + 1) % 3) * 9 + y * 3 + z, vec![1.0, 0.0, 0.0]),
+                    (i, x * 9 + ((y + 1) % 3) * 3 + z, vec![0.0, 1.0, 0.0]),
+                    (i, x * 9 + y * 3 + (z + 1) % 3, vec![0.0, 0.0, 1.0]),
+                ]
+            })
+            .collect();
+        assert_eq!(axes(&[3.0; 3], 27, &cube), [true, true, true]);
+    }
+
+    #[test]
+    fn a_diagonal_loop_wraps_both_axes() {
+        // One grain linked to its own image at (+1, +1) through a second grain.
+        let edges = [(0, 1, vec![1.0, 1.0]), (1, 0, vec![1.0, 1.0])];
+        assert_eq!(axes(&[2.0, 2.0], 2, &edges), [true, true]);
+    }
+}
