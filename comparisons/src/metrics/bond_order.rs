@@ -189,6 +189,99 @@ pub fn local_order(
     matches!(l, 4 | 6).then(|| (0..position.len()).map(per).collect())
 }
 
+/// One Aste sample: its name and, for d_c = 1.1a…1.4a, `(d_c/a, Q̂4, Q̂6)`.
+pub type AsteSample = (&'static str, [(f64, f64, f64); 4]);
+
+/// AR07 App. D, T.VII–T.VIII: the most frequent local order (Q̂4, Q̂6) that Aste et al. measured
+/// for bonds shorter than d_c (in diameters), in their samples F (Φ ≈ 0.640, compared with A, A'
+/// and C), D (Φ ≈ 0.626, compared with B) and B (Φ ≈ 0.596, compared with D): `(sample,
+/// [(d_c, Q̂4, Q̂6); 4])`.
+pub const ASTE_MODES: [AsteSample; 3] = [
+    (
+        "F",
+        [
+            (1.1, 0.23, 0.44),
+            (1.2, 0.16, 0.45),
+            (1.3, 0.13, 0.42),
+            (1.4, 0.10, 0.38),
+        ],
+    ),
+    (
+        "D",
+        [
+            (1.1, 0.25, 0.44),
+            (1.2, 0.19, 0.44),
+            (1.3, 0.15, 0.40),
+            (1.4, 0.11, 0.36),
+        ],
+    ),
+    (
+        "B",
+        [
+            (1.1, 0.30, 0.45),
+            (1.2, 0.23, 0.44),
+            (1.3, 0.16, 0.38),
+            (1.4, 0.14, 0.35),
+        ],
+    ),
+];
+/// AR07 App. D: (Q4, Q6) of fcc-like and hcp-like neighbourhoods.
+pub const FCC_LIKE: (f64, f64) = (0.191, 0.574);
+pub const HCP_LIKE: (f64, f64) = (0.097, 0.485);
+/// AR07 App. D: a grain is in a class when both its Q4^loc and Q6^loc are within this of it.
+pub const ENVIRONMENT_HALF_WIDTH: f64 = 0.05;
+
+/// AR07 T.VII–T.VIII for one bond length: fractions of all grains whose (Q4^loc(i), Q6^loc(i))
+/// lie within ±0.05 of the fcc-like, the hcp-like and each Aste sample's disordered mode.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LocalEnvironments {
+    /// d_c/a.
+    pub cutoff: f64,
+    pub fcc: f64,
+    pub hcp: f64,
+    /// *dis* for each sample of [`ASTE_MODES`], in its order.
+    pub disordered: Vec<(String, f64)>,
+}
+
+/// AR07 T.VII–T.VIII on a 3D snapshot, for d_c = 1.1a, 1.2a, 1.3a, 1.4a (a the largest
+/// diameter). Grains without bonds are in no class. `None` unless 3D, or for a bad cell or a.
+pub fn local_environments(
+    lengths: &[f64],
+    position: &[Vec<f64>],
+    a: f64,
+) -> Option<Vec<LocalEnvironments>> {
+    if lengths.len() != 3 || !valid_cell(lengths) || !(a > 0.0 && a.is_finite()) {
+        return None;
+    }
+    let n = position.len().max(1) as f64;
+    let within = |q: (f64, f64), mode: (f64, f64)| {
+        (q.0 - mode.0).abs() <= ENVIRONMENT_HALF_WIDTH
+            && (q.1 - mode.1).abs() <= ENVIRONMENT_HALF_WIDTH
+    };
+    let per_cutoff = (0..4).map(|k| {
+        let cutoff = ASTE_MODES[0].1[k].0;
+        let b = bonds(lengths, position, cutoff * a);
+        let q: Vec<(f64, f64)> = (0..position.len())
+            .filter(|&g| b.count[g] > 0)
+            .map(|g| {
+                let c = b.count[g] as f64;
+                (q_norm(4, &b.q4[g]) / c, q_norm(6, &b.q6[g]) / c)
+            })
+            .collect();
+        let fraction = |mode: (f64, f64)| q.iter().filter(|&&x| within(x, mode)).count() as f64 / n;
+        LocalEnvironments {
+            cutoff,
+            fcc: fraction(FCC_LIKE),
+            hcp: fraction(HCP_LIKE),
+            disordered: ASTE_MODES
+                .iter()
+                .map(|(name, modes)| (name.to_string(), fraction((modes[k].1, modes[k].2))))
+                .collect(),
+        }
+    });
+    Some(per_cutoff.collect())
+}
+
 /// Crystalline clusters: connected components of the crystalline grains through `pairs`.
 /// Returns (number of clusters, mass-average size Σ n_c²/Σ n_c, largest size).
 pub fn crystalline_clusters(
@@ -491,6 +584,38 @@ mod tests {
         assert!(q6
             .iter()
             .all(|q| (q.unwrap() - b.q6_local.unwrap()).abs() < 1e-12));
+    }
+
+    /// AR07 T.VII–T.VIII classes: every grain of a perfect FCC crystal is fcc-like and every
+    /// grain of an HCP one hcp-like at each d_c = 1.1a…1.4a (second neighbours at √2 a);
+    /// neither is in any disordered mode; a dilute simple cubic lattice (no bonds) is in none.
+    #[test]
+    fn local_environments_of_crystals() {
+        for (lattice, fcc_like) in [(fcc(), true), (hcp(), false)] {
+            let (l, p) = lattice;
+            let envs = local_environments(&l, &p, 1.0).unwrap();
+            assert_eq!(
+                envs.iter().map(|e| e.cutoff).collect::<Vec<_>>(),
+                [1.1, 1.2, 1.3, 1.4]
+            );
+            for e in &envs {
+                let (fcc, hcp) = if fcc_like { (1.0, 0.0) } else { (0.0, 1.0) };
+                assert_eq!((e.fcc, e.hcp), (fcc, hcp), "{e:?}");
+                let names: Vec<&str> = e.disordered.iter().map(|(s, _)| s.as_str()).collect();
+                assert_eq!(names, ["F", "D", "B"]);
+                assert!(e.disordered.iter().all(|(_, x)| *x == 0.0), "{e:?}");
+            }
+        }
+        let (l, p) = sc();
+        let spread: Vec<Vec<f64>> = p
+            .iter()
+            .map(|x| x.iter().map(|c| 2.0 * c).collect())
+            .collect();
+        let wide: Vec<f64> = l.iter().map(|x| 2.0 * x).collect();
+        for e in local_environments(&wide, &spread, 1.0).unwrap() {
+            assert_eq!((e.fcc, e.hcp), (0.0, 0.0));
+        }
+        assert!(local_environments(&[4.0, 4.0], &[vec![0.0, 0.0]], 1.0).is_none());
     }
 
     /// Perfect HCP: Q6 = 0.4848, Q4 = 0.0972, local and global. The two stacking sites have

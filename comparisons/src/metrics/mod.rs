@@ -57,7 +57,7 @@ mod fixtures;
 #[cfg(test)]
 mod tests;
 
-use bond_order::{bond_order, BondOrder, DEFAULT_CUTOFF};
+use bond_order::{bond_order, local_environments, BondOrder, LocalEnvironments, DEFAULT_CUTOFF};
 use fixed_rattlers::{fix_rattlers, FixedRattlers, DEFAULT_SEED};
 use force_distribution::force_stats;
 pub use force_distribution::{ForceStats, PopulationStats};
@@ -172,6 +172,9 @@ pub struct Analysis {
     pub structure: Structure,
     /// Bond-orientational order and crystallinity (AR07 (31)–(34), T.II); 3D only.
     pub bond_order: Option<BondOrder>,
+    /// Fractions of fcc-like, hcp-like and disordered local environments at d_c = 1.1a…1.4a
+    /// (AR07 App. D, T.VII–T.VIII); 3D only.
+    pub local_environments: Option<Vec<LocalEnvironments>>,
     /// Measured pressure and the exact relations.
     pub pressure: Pressure,
 }
@@ -184,7 +187,8 @@ impl Analysis {
     /// `phi`, `z`, `z_star`, `x0`, `xk1` (cohesive only), `xk2`…`xk12` (x_k, variant I), `xk2_II`…`xk12_II`,
     /// `mean_N`, `Z2`, `Z5_3`, `X1`, `M1`, `M2`, `N_2`, `X1_2`, `M1_2`, `M2_2`, `N_3`, `X1_3`,
     /// `M1_3`, `M2_3`, `Q4`, `Q6`, `Q4loc`, `Q6loc`, `Z_bond`, `Z_cr`, `Q6loc_cr`, `x_cr`,
-    /// `n_cr`, `z_plus`, `z_minus`, `z_zero`, `clusters`, `wrapped_axes`, `N_plus`, `N_plus_rms`, `N_minus`,
+    /// `n_cr`, `fcc_110`…`fcc_140`, `hcp_110`…`hcp_140`, `dis_F_110`…`dis_F_140` (and `dis_D_…`,
+    /// `dis_B_…`: AR07 T.VII–T.VIII at d_c = 1.1a…1.4a, 3D), `z_plus`, `z_minus`, `z_zero`, `clusters`, `wrapped_axes`, `N_plus`, `N_plus_rms`, `N_minus`,
     /// `N_minus_rms` (GRC07 T.VI, units of F0), `pressure` (measured).
     pub fn metric_values(&self) -> Vec<(String, f64)> {
         let mut v: Vec<(String, f64)> = Vec::new();
@@ -239,6 +243,14 @@ impl Analysis {
             put("Q6loc_cr", b.q6_local_cr);
             put("x_cr", Some(b.x_cr));
             put("n_cr", b.n_cr);
+        }
+        for e in self.local_environments.iter().flatten() {
+            let dc = (e.cutoff * 100.0).round();
+            put(&format!("fcc_{dc}"), Some(e.fcc));
+            put(&format!("hcp_{dc}"), Some(e.hcp));
+            for (sample, x) in &e.disordered {
+                put(&format!("dis_{sample}_{dc}"), Some(*x));
+            }
         }
         if let Some(s) = &self.cohesive_split {
             put("z_plus", Some(s.z_plus));
@@ -435,6 +447,7 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         }
     };
     let bond_order = a.and_then(|a| bond_order(lengths, position, a, opts.bond_cutoff));
+    let local_environments = a.and_then(|a| local_environments(lengths, position, a));
     let fixed_rattlers = fixed.map(|(f, _)| f);
 
     let pressure = pressure::measure(snap, z, phi, mean_n);
@@ -466,6 +479,7 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         forces,
         structure,
         bond_order,
+        local_environments,
         pressure,
     }
 }

@@ -454,6 +454,13 @@ fn canonical_keys() -> Vec<String> {
         ]
         .map(String::from),
     );
+    for dc in [110, 120, 130, 140] {
+        k.push(format!("fcc_{dc}"));
+        k.push(format!("hcp_{dc}"));
+        for sample in ["F", "D", "B"] {
+            k.push(format!("dis_{sample}_{dc}"));
+        }
+    }
     k
 }
 

@@ -255,6 +255,21 @@ pub fn to_markdown(a: &Analysis) -> String {
             ),
         );
     }
+    for e in a.local_environments.iter().flatten() {
+        let dis: Vec<String> = e
+            .disordered
+            .iter()
+            .map(|(sample, x)| format!("{sample} {}", pct(*x)))
+            .collect();
+        row(
+            &format!("fcc / hcp, d_c = {}a", sig6(e.cutoff)),
+            format!("{} / {}", pct(e.fcc), pct(e.hcp)),
+            &format!(
+                "AR07 T.VII–T.VIII; disordered modes of Aste et al.'s samples: {}",
+                dis.join(", ")
+            ),
+        );
+    }
     let p = &a.pressure;
     row("P measured", opt(p.measured), "tr σ_contact / d");
     row("P kinetic", opt(p.kinetic), "tr σ_kinetic / d");
