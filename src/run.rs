@@ -371,7 +371,6 @@ fn clusters_text(c: &Checks) -> String {
     }
 }
 
-/// P/P₀ against a positive target, else P itself (fixed cell, or P* = 0).
 /// The warning for a stage that frees the cell at zero pressure while the grains still move,
 /// around a network that does not wrap it along some axis: no contact holds the cell there.
 fn unwrapped_warning(p: &Progress) -> Option<String> {
@@ -395,6 +394,7 @@ fn unwrapped_warning(p: &Progress) -> Option<String> {
     ))
 }
 
+/// P/P₀ against a positive target, else P itself (fixed cell, or P* = 0).
 fn pressure_text(c: &Checks) -> String {
     if c.pressure_target > 0.0 {
         format!("P/P₀={:.4}", c.pressure / c.pressure_target)

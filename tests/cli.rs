@@ -589,6 +589,20 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
         &["cell shrank", "two periodic images"],
     );
 
+    // A quiet run of `scene` into `dir/<out>` that must succeed: its stderr.
+    let run_ok = |scene: &std::path::Path, out: &str| {
+        let o = grainbench()
+            .arg("run")
+            .arg(scene)
+            .args(["-q", "-o"])
+            .arg(dir.path().join(out))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{err}");
+        err
+    };
+
     // `min_diameter = 1e-2` in 3D was accepted without a word on its 1000× steps.
     let tiny = scene_file(
         dir.path(),
@@ -597,15 +611,7 @@ fn hostile_scene_inputs_neither_panic_nor_hang() {
             .replace("count = 250", "count = 250\nmin_diameter = 0.01")
             .replace("max_time = 4.0", "max_time = 1e-4"),
     );
-    let out = grainbench()
-        .arg("run")
-        .arg(&tiny)
-        .args(["-q", "-o"])
-        .arg(dir.path().join("tiny"))
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
+    let err = run_ok(&tiny, "tiny");
     assert!(
         err.contains("warning: particles.min_diameter = 0.01") && err.contains("1000× the steps"),
         "{err}"
@@ -640,15 +646,7 @@ max_time = 1.0
 criteria = { preset = "grc07" }
 "#,
     );
-    let out = grainbench()
-        .arg("run")
-        .arg(&drift)
-        .args(["-q", "-o"])
-        .arg(dir.path().join("drift"))
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
+    let err = run_ok(&drift, "drift");
     assert!(
         err.contains("warning: stage 1 (compress) frees the cell at zero pressure")
             && err.contains("does not wrap the cell along x and y")
@@ -663,15 +661,8 @@ criteria = { preset = "grc07" }
             .unwrap()
             .replace("pressure = 0.0", "pressure = 0.01"),
     );
-    let out = grainbench()
-        .arg("run")
-        .arg(&squeeze)
-        .args(["-q", "-o"])
-        .arg(dir.path().join("squeeze"))
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success() && !err.contains("wrap"), "{err}");
+    let err = run_ok(&squeeze, "squeeze");
+    assert!(!err.contains("wrap"), "{err}");
 
     // `mu = "abc"` pointed at `[law]` without naming the field.
     let abc = scene_file(
