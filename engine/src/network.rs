@@ -10,16 +10,16 @@
 ///
 /// # Panics
 /// If an edge names a grain ≥ `n` or has a branch shorter than `lengths`.
-pub fn wrapped_axes<'a>(
+pub fn wrapped_axes<B: AsRef<[f64]>>(
     lengths: &[f64],
     n: usize,
-    edges: impl IntoIterator<Item = (usize, usize, &'a [f64])>,
+    edges: impl IntoIterator<Item = (usize, usize, B)>,
 ) -> Vec<bool> {
     let d = lengths.len();
     // Adjacency in compressed rows: (neighbour, edge index, sign of the branch).
-    let edges: Vec<(usize, usize, &[f64])> = edges.into_iter().collect();
+    let edges: Vec<(usize, usize, B)> = edges.into_iter().collect();
     let mut start = vec![0usize; n + 1];
-    for &(i, j, _) in &edges {
+    for (i, j, _) in &edges {
         start[i + 1] += 1;
         start[j + 1] += 1;
     }
@@ -34,34 +34,33 @@ pub fn wrapped_axes<'a>(
         adj[fill[j]] = (i, e, -1.0);
         fill[j] += 1;
     }
-    // Breadth-first walk: each grain gets an unwrapped position relative to the first grain
-    // of its cluster; an edge closing a loop whose branches sum to a non-zero lattice vector
-    // wraps the cell.
-    let mut offset: Vec<Option<Vec<f64>>> = vec![None; n];
+    // Breadth-first walk: each grain gets an unwrapped position (`offset`, d values a grain)
+    // relative to the first grain of its cluster; an edge closing a loop whose branches sum to
+    // a non-zero lattice vector wraps the cell.
+    let mut offset = vec![0.0; n * d];
+    let mut placed = vec![false; n];
     let mut wraps = vec![false; d];
     let mut queue = std::collections::VecDeque::new();
     for first in 0..n {
-        if offset[first].is_some() {
+        if placed[first] {
             continue;
         }
-        offset[first] = Some(vec![0.0; d]);
+        placed[first] = true;
         queue.push_back(first);
         while let Some(i) = queue.pop_front() {
-            let oi = offset[i].clone().expect("queued grains are placed");
             for &(j, e, sign) in &adj[start[i]..start[i + 1]] {
-                let reached: Vec<f64> = (0..d).map(|a| oi[a] + sign * edges[e].2[a]).collect();
-                match &offset[j] {
-                    None => {
-                        offset[j] = Some(reached);
-                        queue.push_back(j);
+                let branch = edges[e].2.as_ref();
+                for a in 0..d {
+                    let reached = offset[i * d + a] + sign * branch[a];
+                    if !placed[j] {
+                        offset[j * d + a] = reached;
+                    } else if ((reached - offset[j * d + a]) / lengths[a]).round() != 0.0 {
+                        wraps[a] = true;
                     }
-                    Some(oj) => {
-                        for a in 0..d {
-                            if ((reached[a] - oj[a]) / lengths[a]).round() != 0.0 {
-                                wraps[a] = true;
-                            }
-                        }
-                    }
+                }
+                if !placed[j] {
+                    placed[j] = true;
+                    queue.push_back(j);
                 }
             }
         }

@@ -188,8 +188,9 @@ impl Analysis {
     /// `mean_N`, `Z2`, `Z5_3`, `X1`, `M1`, `M2`, `N_2`, `X1_2`, `M1_2`, `M2_2`, `N_3`, `X1_3`,
     /// `M1_3`, `M2_3`, `Q4`, `Q6`, `Q4loc`, `Q6loc`, `Z_bond`, `Z_cr`, `Q6loc_cr`, `x_cr`,
     /// `n_cr`, `fcc_110`…`fcc_140`, `hcp_110`…`hcp_140`, `dis_F_110`…`dis_F_140` (and `dis_D_…`,
-    /// `dis_B_…`: AR07 T.VII–T.VIII at d_c = 1.1a…1.4a, 3D), `z_plus`, `z_minus`, `z_zero`, `clusters`, `wrapped_axes`, `N_plus`, `N_plus_rms`, `N_minus`,
-    /// `N_minus_rms` (GRC07 T.VI, units of F0), `pressure` (measured).
+    /// `dis_B_…`: AR07 T.VII–T.VIII at d_c = 1.1a…1.4a, 3D), `z_plus`, `z_minus`, `z_zero`,
+    /// `clusters`, `wrapped_axes`, `N_plus`, `N_plus_rms`, `N_minus`, `N_minus_rms` (GRC07 T.VI,
+    /// units of F0), `pressure` (measured).
     pub fn metric_values(&self) -> Vec<(String, f64)> {
         let mut v: Vec<(String, f64)> = Vec::new();
         let mut put = |k: &str, x: Option<f64>| {

@@ -355,15 +355,10 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             if let Some(cb) = opts.progress.as_mut() {
                 let stressed = matches!(sys.cell.control, Control::Stress { .. });
                 let wrapped_axes = (first_check && stressed).then(|| {
-                    let l = sys.cell.l.to_vec();
-                    let branches: Vec<Vec<f64>> = inter.iter().map(|c| c.branch.to_vec()).collect();
                     network::wrapped_axes(
-                        &l,
+                        &sys.cell.l.to_vec(),
                         sys.len(),
-                        inter
-                            .iter()
-                            .zip(&branches)
-                            .map(|(c, b)| (c.i, c.j, b.as_slice())),
+                        inter.iter().map(|c| (c.i, c.j, c.branch.to_vec())),
                     )
                 });
                 first_check = false;
