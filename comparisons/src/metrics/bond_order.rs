@@ -133,6 +133,14 @@ struct Bonds {
     g6: [f64; 13],
 }
 
+impl Bonds {
+    /// AR07 (31) for grain `g`: (Q4^loc(g), Q6^loc(g)); `None` without bonds.
+    fn local(&self, g: usize) -> Option<(f64, f64)> {
+        let k = self.count[g] as f64;
+        (self.count[g] > 0).then(|| (q_norm(4, &self.q4[g]) / k, q_norm(6, &self.q6[g]) / k))
+    }
+}
+
 fn bonds(lengths: &[f64], position: &[Vec<f64>], cutoff: f64) -> Bonds {
     let n = position.len();
     let pts = points(3, position);
@@ -179,13 +187,7 @@ pub fn local_order(
         return None;
     }
     let b = bonds(lengths, position, cutoff_over_a * a);
-    let per = |g: usize| -> Option<f64> {
-        let k = b.count[g] as f64;
-        (b.count[g] > 0).then(|| match l {
-            4 => q_norm(4, &b.q4[g]) / k,
-            _ => q_norm(6, &b.q6[g]) / k,
-        })
-    };
+    let per = |g: usize| b.local(g).map(|(q4, q6)| if l == 4 { q4 } else { q6 });
     matches!(l, 4 | 6).then(|| (0..position.len()).map(per).collect())
 }
 
@@ -261,13 +263,7 @@ pub fn local_environments(
     let per_cutoff = (0..4).map(|k| {
         let cutoff = ASTE_MODES[0].1[k].0;
         let b = bonds(lengths, position, cutoff * a);
-        let q: Vec<(f64, f64)> = (0..position.len())
-            .filter(|&g| b.count[g] > 0)
-            .map(|g| {
-                let c = b.count[g] as f64;
-                (q_norm(4, &b.q4[g]) / c, q_norm(6, &b.q6[g]) / c)
-            })
-            .collect();
+        let q: Vec<(f64, f64)> = (0..position.len()).filter_map(|g| b.local(g)).collect();
         let fraction = |mode: (f64, f64)| q.iter().filter(|&&x| within(x, mode)).count() as f64 / n;
         LocalEnvironments {
             cutoff,
@@ -345,12 +341,8 @@ pub fn bond_order(
 
     // Local order.
     let bonded: Vec<usize> = (0..n).filter(|&g| b.count[g] > 0).collect();
-    let q4loc: Vec<f64> = (0..n)
-        .map(|g| q_norm(4, &b.q4[g]) / b.count[g].max(1) as f64)
-        .collect();
-    let q6loc: Vec<f64> = (0..n)
-        .map(|g| q_norm(6, &b.q6[g]) / b.count[g].max(1) as f64)
-        .collect();
+    let (q4loc, q6loc): (Vec<f64>, Vec<f64>) =
+        (0..n).map(|g| b.local(g).unwrap_or((0.0, 0.0))).unzip();
     let mean_over = |v: &[f64], set: &[usize]| {
         (!set.is_empty()).then(|| set.iter().map(|&g| v[g]).sum::<f64>() / set.len() as f64)
     };
