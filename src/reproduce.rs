@@ -170,7 +170,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         let path = record(a, &scene_name, &base, &state_key, &runs, &values, &table)?;
         println!("recorded   {}", path.display());
         // The table and the vector plots go beside the record, for reading on the web.
-        for f in ["report.md", "pf.svg", "gr.svg"] {
+        for f in ["report.md", "pf.svg", "gr.svg", "ik.svg"] {
             let (from, to) = (out.join(f), path.with_file_name(f));
             if from.exists() {
                 let bytes = std::fs::read(&from)?;
@@ -210,7 +210,8 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
 }
 
 /// P(f) and g(r) of every analysis (one curve per label: seeds, codes), overlaid; the DTS fit
-/// for cohesionless frictionless sphere packings (AR07 Fig. 4). Returns the files written.
+/// for cohesionless frictionless sphere packings (AR07 Fig. 4); I(k) with its GRC07 (28) fit
+/// for 2D cohesive packings. Returns the files written.
 pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) -> Vec<PathBuf> {
     let mut written = Vec::new();
     let pf: Vec<Vec<(f64, f64)>> = analyses
@@ -245,6 +246,42 @@ pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) 
     match plots::pair_correlation(&out.join("gr"), &series(&gr, labels), Some(8.0)) {
         Ok(f) => written.extend([f.svg, f.png]),
         Err(e) => eprintln!("warning: no g(r) plot: {e}"),
+    }
+    // GRC07 Fig. 23: I(k) of each seed and its fit by GRC07 (28), 2D cohesive packings.
+    let mut ik: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for (a, l) in analyses.iter().zip(labels) {
+        let Some(d) = &a.density else { continue };
+        let s = &d.scattering;
+        ik.push((
+            l.clone(),
+            s.k.iter()
+                .copied()
+                .zip(s.intensity.iter().copied())
+                .collect(),
+        ));
+        if let Some(f) = &d.fit {
+            let curve = (0..=60)
+                .map(|q| f.k_min * (f.k_max / f.k_min).powf(q as f64 / 60.0))
+                .map(|k| (k, f.model.eval(k)))
+                .collect();
+            ik.push((
+                format!(
+                    "{l}: GRC07 (28), d_F = {:.2}, ξ = {:.2} a",
+                    f.model.d_f, f.model.xi
+                ),
+                curve,
+            ));
+        }
+    }
+    if !ik.is_empty() {
+        let s: Vec<plots::Series> = ik.iter().map(|(l, p)| plots::Series::new(l, p)).collect();
+        let mut plot = plots::LinePlot::new("Scattering function I(k)", "k a", "I(k) / a²", &s);
+        plot.x_axis = plots::Axis::Log;
+        plot.y_axis = plots::Axis::Log;
+        match plots::line_plot(&out.join("ik"), &plot) {
+            Ok(f) => written.extend([f.svg, f.png]),
+            Err(e) => eprintln!("warning: no I(k) plot: {e}"),
+        }
     }
     written
 }

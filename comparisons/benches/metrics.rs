@@ -7,14 +7,19 @@
 //! - `rattlers`: iterated rattler removal (AR07 §III.B) on the pairs closer than 0.02 a;
 //! - `pair_correlation`: g(r) up to r = 3 a, bins of 0.02 a (AR07 §III.D);
 //! - `gap_coordination`: z(h) on the default gap grid up to h = 0.1 a (AR07 §III.D).
+//! - `density_2d/*`: GRC07 §V on 1400 disks at Φ = 0.36 (a 42 a cell), mesh a/50: the
+//!   indicator field, I(k) by 2D FFT, the fit of GRC07 (28) and the holes, and all of it.
 //!
 //! The configuration is the engine's random gas at Φ = 0.36 rescaled to Φ ≈ 0.6 (grains
 //! overlap; the metrics do not care), so the bench does not depend on a DEM run.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use grainbench_comparisons::metrics::density::{density_correlations, DEFAULT_SPACING};
+use grainbench_comparisons::metrics::density_field::{rasterize, scattering};
+use grainbench_comparisons::metrics::holes::holes;
 use grainbench_comparisons::metrics::structure::default_gap_grid;
 use grainbench_comparisons::{find_rattlers, gap_coordination, pair_correlation, Rule};
-use grainbench_engine::geometry::D3;
+use grainbench_engine::geometry::{D2, D3};
 use grainbench_engine::init::random_gas;
 use std::hint::black_box;
 use std::time::Duration;
@@ -65,5 +70,44 @@ fn metrics(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, metrics);
+fn density(c: &mut Criterion) {
+    let n = 1400;
+    let gas = random_gas::<D2>(n, 0.5, None, 0.36, 7).expect("random gas");
+    let lengths: Vec<f64> = (0..2).map(|a| gas.l[a]).collect();
+    let position: Vec<Vec<f64>> = gas
+        .s
+        .iter()
+        .map(|s| (0..2).map(|a| s[a] * lengths[a]).collect())
+        .collect();
+    let radius: Vec<f64> = gas.diameter.iter().map(|d| 0.5 * d).collect();
+    let mesh = rasterize(&lengths, &position, &radius, DEFAULT_SPACING).expect("mesh");
+    let mut group = c.benchmark_group("density_2d");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3))
+        .throughput(Throughput::Elements((mesh.nx * mesh.ny) as u64));
+    group.bench_function("rasterize", |b| {
+        b.iter(|| rasterize(&lengths, black_box(&position), &radius, DEFAULT_SPACING))
+    });
+    group.bench_function("scattering", |b| {
+        b.iter(|| scattering(black_box(&mesh), 4.0 * std::f64::consts::PI))
+    });
+    group.bench_function("holes", |b| b.iter(|| holes(black_box(&mesh))));
+    group.bench_function("all", |b| {
+        b.iter(|| {
+            density_correlations(
+                &lengths,
+                black_box(&position),
+                &radius,
+                1.0,
+                0.36,
+                DEFAULT_SPACING,
+            )
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, metrics, density);
 criterion_main!(benches);

@@ -43,8 +43,12 @@
 //! * this module: [`analyze`], [`Options`], [`Analysis`], [`Analysis::metric_values`].
 
 pub mod bond_order;
+pub mod density;
+pub mod density_field;
 pub mod fixed_rattlers;
 pub mod force_distribution;
+pub mod fractal_fit;
+pub mod holes;
 mod math;
 mod neighbors;
 pub mod pressure;
@@ -58,6 +62,7 @@ mod fixtures;
 mod tests;
 
 use bond_order::{bond_order, local_environments, BondOrder, LocalEnvironments, DEFAULT_CUTOFF};
+use density::{density_correlations, DensityCorrelations};
 use fixed_rattlers::{fix_rattlers, FixedRattlers, DEFAULT_SEED};
 use force_distribution::force_stats;
 pub use force_distribution::{ForceStats, PopulationStats};
@@ -94,6 +99,8 @@ pub struct Options {
     pub fix_rattlers: bool,
     /// Seed of the random force directions on the rattlers (variant II).
     pub seed: u64,
+    /// Mesh spacing, in a, of the density field of 2D cohesive packings (GRC07 §V.C).
+    pub density_spacing: f64,
 }
 
 impl Default for Options {
@@ -110,6 +117,7 @@ impl Default for Options {
             bond_cutoff: DEFAULT_CUTOFF,
             fix_rattlers: true,
             seed: DEFAULT_SEED,
+            density_spacing: density::DEFAULT_SPACING,
         }
     }
 }
@@ -175,6 +183,8 @@ pub struct Analysis {
     /// Fractions of fcc-like, hcp-like and disordered local environments at d_c = 1.1a…1.4a
     /// (AR07 App. D, T.VII–T.VIII); 3D only.
     pub local_environments: Option<Vec<LocalEnvironments>>,
+    /// Density correlations, fractal dimension and holes (GRC07 §V); 2D cohesive packings.
+    pub density: Option<DensityCorrelations>,
     /// Measured pressure and the exact relations.
     pub pressure: Pressure,
 }
@@ -190,7 +200,8 @@ impl Analysis {
     /// `n_cr`, `fcc_110`…`fcc_140`, `hcp_110`…`hcp_140`, `dis_F_110`…`dis_F_140` (and `dis_D_…`,
     /// `dis_B_…`: AR07 T.VII–T.VIII at d_c = 1.1a…1.4a, 3D), `z_plus`, `z_minus`, `z_zero`,
     /// `clusters`, `wrapped_axes`, `N_plus`, `N_plus_rms`, `N_minus`, `N_minus_rms` (GRC07 T.VI,
-    /// units of F0), `pressure` (measured).
+    /// units of F0), `d_F`, `xi`, `R_w` (GRC07 T.VII and (30), lengths in a), `pressure`
+    /// (measured).
     pub fn metric_values(&self) -> Vec<(String, f64)> {
         let mut v: Vec<(String, f64)> = Vec::new();
         let mut put = |k: &str, x: Option<f64>| {
@@ -263,6 +274,11 @@ impl Analysis {
             put("N_plus_rms", s.rms_repulsive);
             put("N_minus", s.mean_attractive);
             put("N_minus_rms", s.rms_attractive);
+        }
+        if let Some(c) = &self.density {
+            put("d_F", c.fit.as_ref().map(|f| f.model.d_f));
+            put("xi", c.fit.as_ref().map(|f| f.model.xi));
+            put("R_w", c.holes.weighted_radius);
         }
         put("pressure", self.pressure.measured);
         v
@@ -449,6 +465,9 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
     };
     let bond_order = a.and_then(|a| bond_order(lengths, position, a, opts.bond_cutoff));
     let local_environments = a.and_then(|a| local_environments(lengths, position, a));
+    let density = a.filter(|_| snap.cohesive).and_then(|a| {
+        density_correlations(lengths, position, radius, a, phi, opts.density_spacing)
+    });
     let fixed_rattlers = fixed.map(|(f, _)| f);
 
     let pressure = pressure::measure(snap, z, phi, mean_n);
@@ -481,6 +500,7 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         structure,
         bond_order,
         local_environments,
+        density,
         pressure,
     }
 }

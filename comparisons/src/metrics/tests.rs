@@ -801,3 +801,23 @@ fn wrapped_axes_of_a_cohesive_network() {
     assert_eq!(b.len() - open.len(), 4);
     assert_eq!(wraps(&open), 1);
 }
+
+/// GRC07 §V runs on 2D cohesive packings only: a square lattice of slightly overlapping disks
+/// (one closed hole per lattice cell, nothing percolates) has ⟨R⟩_w of that hole; the same
+/// grains without cohesion get no density section.
+#[test]
+fn density_correlations_of_a_cohesive_2d_packing() {
+    let (l, r, p, b) = lattice(2, 6, 1.0, 0.505, -0.1);
+    let snap = snapshot(l.clone(), r.clone(), p.clone(), &b, true, Some(0.5));
+    let a = analyze(&snap, &Options::default());
+    let d = a.density.as_ref().expect("2D cohesive");
+    assert_eq!(d.holes.count, 36);
+    assert!(!d.holes.percolating);
+    // The concave square between four disks, area 1 − π·0.505² ≈ 0.2 a².
+    let r_w = value(&a.metric_values(), "R_w").expect("R_w");
+    assert!(r_w > 0.2 && r_w < 0.5, "{r_w}");
+    let dry = snapshot(l, r, p, &b, false, Some(0.5));
+    let a = analyze(&dry, &Options::default());
+    assert!(a.density.is_none());
+    assert_eq!(value(&a.metric_values(), "R_w"), None);
+}

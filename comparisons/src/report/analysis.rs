@@ -270,6 +270,48 @@ pub fn to_markdown(a: &Analysis) -> String {
             ),
         );
     }
+    if let Some(c) = &a.density {
+        match &c.fit {
+            Some(f) => row(
+                "d_F, ξ",
+                format!(
+                    "{} ± {}, {} ± {}",
+                    sig6(f.model.d_f),
+                    sig6(f.d_f_error),
+                    sig6(f.model.xi),
+                    sig6(f.xi_error)
+                ),
+                &format!(
+                    "GRC07 (28) fitted to I(k) over {} ≤ ka ≤ {} ({} shells, rms ln residual {}; \
+                     mesh {}×{}, series in JSON: density)",
+                    sig6(f.k_min),
+                    sig6(f.k_max),
+                    f.points,
+                    sig6(f.rms_log_residual),
+                    c.nodes[0],
+                    c.nodes[1]
+                ),
+            ),
+            None => row(
+                "d_F, ξ",
+                "n/a".into(),
+                "GRC07 (28) could not be fitted to I(k)",
+            ),
+        }
+        row(
+            "⟨R⟩_w",
+            opt(c.holes.weighted_radius),
+            &format!(
+                "hole radius, GRC07 (30), in a: {} holes{}",
+                c.holes.count,
+                if c.holes.percolating {
+                    "; the empty space percolates (GRC07 §V.C: P* > 0 only)"
+                } else {
+                    ""
+                }
+            ),
+        );
+    }
     let p = &a.pressure;
     row("P measured", opt(p.measured), "tr σ_contact / d");
     row("P kinetic", opt(p.kinetic), "tr σ_kinetic / d");
