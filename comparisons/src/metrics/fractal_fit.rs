@@ -177,7 +177,7 @@ pub fn fit(k: &[f64], intensity: &[f64], k_min: f64, k_max: f64) -> Option<Fract
     let xi0 = 0.25 * 2.0 * std::f64::consts::PI / ks[0];
     let start = Vector4::new((0.1 * i_min).sqrt(), (2.0 * is[0]).ln(), 1.8, xi0.ln());
     let problem = Problem {
-        k: ks.clone(),
+        k: ks,
         ln_i: is.iter().map(|i| i.ln()).collect(),
         p: start,
     };
@@ -193,6 +193,7 @@ pub fn fit(k: &[f64], intensity: &[f64], k_min: f64, k_max: f64) -> Option<Fract
     }
     let r = problem.residuals()?;
     let j = problem.jacobian()?;
+    let ks = &problem.k;
     let dof = (ks.len() - 4).max(1) as f64;
     let s2 = r.norm_squared() / dof;
     // Covariance s²(JᵀJ)⁻¹; when the constant has gone to 0 its column vanishes and the

@@ -66,21 +66,9 @@ pub fn holes(mesh: &Mesh) -> Holes {
             sy += y;
             sxx += x * x + y * y;
             for (di, dj) in [(1i64, 0i64), (-1, 0), (0, 1), (0, -1)] {
-                let (mut qi, mut qj, mut qw) = (i + di, j + dj, w);
-                if qi < 0 {
-                    qi += nx;
-                    qw[0] -= 1;
-                } else if qi >= nx {
-                    qi -= nx;
-                    qw[0] += 1;
-                }
-                if qj < 0 {
-                    qj += ny;
-                    qw[1] -= 1;
-                } else if qj >= ny {
-                    qj -= ny;
-                    qw[1] += 1;
-                }
+                let (qi, wx) = wrap(i + di, nx);
+                let (qj, wy) = wrap(j + dj, ny);
+                let qw = [w[0] + wx, w[1] + wy];
                 let q = (qj * nx + qi) as usize;
                 if mesh.solid[q] {
                     continue;
@@ -114,8 +102,18 @@ pub fn holes(mesh: &Mesh) -> Holes {
     }
 }
 
+/// Index `i` brought into 0..n, and the winding that took (−1, 0 or +1: one step at most).
+fn wrap(i: i64, n: i64) -> (i64, i32) {
+    if i < 0 {
+        (i + n, -1)
+    } else if i >= n {
+        (i - n, 1)
+    } else {
+        (i, 0)
+    }
+}
+
 fn shells(found: &[(usize, f64)]) -> Vec<HoleShell> {
-    let mut out: Vec<HoleShell> = Vec::new();
     let per_decade = 5.0;
     let mut bins: std::collections::BTreeMap<i64, (usize, usize)> = Default::default();
     for &(m, r) in found.iter().filter(|h| h.1 > 0.0) {
@@ -124,15 +122,14 @@ fn shells(found: &[(usize, f64)]) -> Vec<HoleShell> {
         e.0 += 1;
         e.1 += m;
     }
-    for (b, (holes, nodes)) in bins {
-        out.push(HoleShell {
+    bins.into_iter()
+        .map(|(b, (holes, nodes))| HoleShell {
             r_min: 10f64.powf(b as f64 / per_decade),
             r_max: 10f64.powf((b + 1) as f64 / per_decade),
             holes,
             nodes,
-        });
-    }
-    out
+        })
+        .collect()
 }
 
 #[cfg(test)]
