@@ -1,13 +1,28 @@
 //! `grainbench analyze`: the packing metrics of a snapshot, or of another code's final dumps.
 
-use crate::common::analysis_of;
-use anyhow::{bail, Result};
+use crate::common::{contact_stiffness, load_scene};
+use anyhow::{anyhow, bail, Context, Result};
+use grainbench_comparisons::metrics::{analyze as measure, stiffness::ContactStiffness, Options};
 use grainbench_comparisons::xcode::{import, Code};
 use grainbench_engine::Snapshot;
 use std::path::Path;
 
-/// `grainbench analyze SNAPSHOT [--from CODE] [--write FILE] [--json]`.
-pub fn analyze(path: &Path, json: bool, from: Option<&str>, write: Option<&Path>) -> Result<i32> {
+/// What `analyze` measures besides the defaults.
+pub struct Extra<'a> {
+    /// Elastic moduli and rigidity (GRC08 §VI, GRC07 App. A).
+    pub moduli: bool,
+    /// The scene whose law gives the contact stiffnesses (default: the snapshot's scene).
+    pub scene: Option<&'a str>,
+}
+
+/// `grainbench analyze SNAPSHOT [--from CODE] [--write FILE] [--json] [--moduli [--scene S]]`.
+pub fn analyze(
+    path: &Path,
+    json: bool,
+    from: Option<&str>,
+    write: Option<&Path>,
+    extra: &Extra,
+) -> Result<i32> {
     let snap = match from {
         None => Snapshot::read(path)?,
         Some(name) => {
@@ -30,11 +45,30 @@ pub fn analyze(path: &Path, json: bool, from: Option<&str>, write: Option<&Path>
     if let Some(w) = write {
         snap.write(w)?;
     }
-    let a = analysis_of(&snap);
+    let mut opts = Options::default();
+    if extra.moduli {
+        opts.moduli = Some(stiffness_of(&snap, extra.scene)?);
+    } else if extra.scene.is_some() {
+        bail!("--scene gives the law for --moduli: add --moduli");
+    }
+    let a = measure(&snap, &opts);
     if json {
         println!("{}", serde_json::to_string_pretty(&a)?);
     } else {
         print!("{}", grainbench_comparisons::report::to_markdown(&a));
     }
     Ok(0)
+}
+
+/// The contact stiffnesses of the snapshot's law: from `scene` (a file or an embedded name),
+/// else from the embedded scene the snapshot names.
+fn stiffness_of(snap: &Snapshot, scene: Option<&str>) -> Result<ContactStiffness> {
+    let spec = scene.unwrap_or(&snap.scene);
+    let sc = load_scene(spec).with_context(|| {
+        format!(
+            "--moduli needs the contact law, which a snapshot does not carry: its scene `{}` is not embedded; give the scene with --scene FILE|NAME",
+            snap.scene
+        )
+    })?;
+    contact_stiffness(&sc, snap).map_err(|e| anyhow!("--scene {spec}: {e}"))
 }

@@ -2,7 +2,7 @@
 //! count, scene lookup, and the packing analysis of a snapshot.
 
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::metrics::{analyze, Analysis};
+use grainbench_comparisons::metrics::{analyze, stiffness::ContactStiffness, Analysis, Options};
 use grainbench_engine::{library, Scene, Snapshot};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -68,4 +68,39 @@ pub fn list_scenes() -> Result<i32> {
 /// The packing metrics of a snapshot with the default options (as `analyze` prints them).
 pub fn analysis_of(snap: &Snapshot) -> Analysis {
     analyze(snap, &Default::default())
+}
+
+/// The contact stiffnesses of `scene`'s law for `snap`: the κ of the scene's last stage, the
+/// snapshot's μ.
+pub fn contact_stiffness(scene: &Scene, snap: &Snapshot) -> Result<ContactStiffness, String> {
+    if scene.dimension != snap.dimension {
+        return Err(format!(
+            "a {}D scene for a {}D snapshot",
+            scene.dimension, snap.dimension
+        ));
+    }
+    let kappa = scene
+        .protocol
+        .last()
+        .and_then(|s| s.kappa())
+        .unwrap_or_else(|| scene.law.kappa());
+    ContactStiffness::of_law(&scene.law, kappa, snap.mu)
+}
+
+/// The packing metrics of a snapshot with the elastic moduli of `scene`'s law (`compare`:
+/// every code's final state under the one law).
+pub fn analysis_with_moduli(snap: &Snapshot, scene: &Scene) -> Analysis {
+    match contact_stiffness(scene, snap) {
+        Ok(k) => analyze(
+            snap,
+            &Options {
+                moduli: Some(k),
+                ..Default::default()
+            },
+        ),
+        Err(e) => Analysis {
+            moduli: Some(Err(e)),
+            ..analysis_of(snap)
+        },
+    }
 }

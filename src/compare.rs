@@ -3,7 +3,7 @@
 //! them with the same `comparisons/` code, and writes the table (Markdown, CSV, JSON) and the
 //! overlaid P(f) and g(r) plots. `grainbench golden update` records the results.
 
-use crate::common::{analysis_of, load_scene, STOP};
+use crate::common::{analysis_with_moduli, load_scene, STOP};
 use crate::external::{self, clean_version};
 use crate::run::{run, RunFlags};
 use crate::xcode;
@@ -78,7 +78,7 @@ pub fn compare(a: &Args) -> Result<i32> {
             _ => external::run(&start, code, &dir, a.time_limit, a.np, a.quiet, &mut r)?,
         };
         if let Some(snap) = snap {
-            let analysis = analysis_of(&snap);
+            let analysis = analysis_with_moduli(&snap, &scene);
             r.metrics = analysis.metric_values().into_iter().collect();
             r.status = Some(snap.status.clone());
             analyses.push((code.name().to_string(), analysis));

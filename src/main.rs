@@ -82,6 +82,15 @@ enum Command {
         /// Also write the state read as a grainbench snapshot.
         #[arg(long, value_name = "FILE")]
         write: Option<PathBuf>,
+        /// Also the elastic moduli B, G with their Voigt and Reuss estimates, the energy
+        /// concentration of a pressure increment (GRC08 §VI) and the mechanisms and force
+        /// indeterminacy of the network (GRC07 App. A), from its stiffness matrix.
+        #[arg(long)]
+        moduli: bool,
+        /// With --moduli: the scene (file or embedded name) whose law gives the contact
+        /// stiffnesses (default: the scene the snapshot names).
+        #[arg(long, value_name = "SCENE")]
+        scene: Option<String>,
     },
     /// List the embedded scenes.
     Scenes,
@@ -286,7 +295,18 @@ fn dispatch(cli: Cli) -> Result<i32> {
             json,
             from,
             write,
-        } => analyze::analyze(&snapshot, json, from.as_deref(), write.as_deref()),
+            moduli,
+            scene,
+        } => analyze::analyze(
+            &snapshot,
+            json,
+            from.as_deref(),
+            write.as_deref(),
+            &analyze::Extra {
+                moduli,
+                scene: scene.as_deref(),
+            },
+        ),
         Command::Reproduce {
             paper,
             state,

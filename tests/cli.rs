@@ -37,8 +37,13 @@ max_time = 4.0
 "#;
 
 fn analyze_json(snap: &Path) -> Value {
+    analyze_json_with(snap, &[])
+}
+
+fn analyze_json_with(snap: &Path, extra: &[&str]) -> Value {
     let out = grainbench()
         .args(["analyze", "--json"])
+        .args(extra)
         .arg(snap)
         .assert()
         .success()
@@ -187,7 +192,23 @@ fn equilibrated(scene: &str) -> Value {
     let summary: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "equilibrium");
-    analyze_json(&out.join("final.snap.json"))
+    analyze_json_with(&out.join("final.snap.json"), &["--moduli"])
+}
+
+/// The elastic moduli of an equilibrated packing (`analyze --moduli`) lie between the Reuss
+/// and Voigt bounds (GRC08 (12)–(14): B^R ≤ B ≤ B^V, G ≤ G^V), and the network has `k`
+/// mechanisms with the cell fixed. Returns the moduli.
+fn check_moduli(a: &Value, k: u64) -> &Value {
+    let m = &a["moduli"]["Ok"];
+    let (b, g) = (f(m, &["bulk"]), f(m, &["shear"]));
+    assert!(b > 0.0 && g > 0.0, "{m}");
+    assert!(
+        f(m, &["reuss_bulk"]) <= b && b <= f(m, &["voigt_bulk"]),
+        "{m}"
+    );
+    assert!(g <= f(m, &["voigt_shear"]), "{m}");
+    assert_eq!(m["rigidity"]["mechanisms"], k, "{m}");
+    m
 }
 
 fn f(v: &Value, path: &[&str]) -> f64 {
@@ -224,6 +245,9 @@ fn frictionless_3d_packing_reaches_ar07_criteria() {
     assert!(f(&a, &["pressure", "exact_rel_diff"]).abs() < 1e-6);
     let eq22 = f(&a, &["pressure", "ar07_22", "rel_diff"]);
     assert!(eq22.abs() < 1e-3, "AR07 (22) off by {eq22}");
+    // AR07 §II.C: the backbone has no mechanism but the 3 global translations (rotations of
+    // frictionless spheres are not degrees of freedom).
+    check_moduli(&a, 3);
 }
 
 /// 2D cohesionless linear disks (diameters in [a/2, a]), N = 400, μ = 0.5, Φ_I = 0.36,
@@ -248,6 +272,8 @@ fn cohesionless_2d_packing_reaches_criteria() {
     // With N = 400 we measure a 2–3 % excess (bigger grains carry bigger forces).
     let eq18 = f(&a, &["pressure", "grc07_18", "rel_diff"]);
     assert!(eq18.abs() < 0.05, "GRC07 (18) off by {eq18}");
+    // A rigid backbone: only the 2 global translations are free.
+    check_moduli(&a, 2);
 }
 
 /// GRC07 §II.D on an adhesive packing (issue 12): the reduced type-1 state with rolling
@@ -294,6 +320,11 @@ fn cohesive_2d_packing_relaxes_to_grc07_criteria_and_resumes_bit_identical() {
         f(stage, &["time"]) >= f(r, &["start_time"]) + 2.0,
         "{stage}"
     );
+    // GRC07 §IV.C: with RR every connected cluster is rigid (GRC07 App. A, checked there on
+    // the stiffness matrix); GRC08 §VI.C: loose cohesive moduli far below the Voigt estimate.
+    let a = analyze_json_with(&out.join("final.snap.json"), &["--moduli"]);
+    let m = check_moduli(&a, 2);
+    assert!(f(m, &["voigt_bulk"]) > 3.0 * f(m, &["bulk"]), "{m}");
     let straight = std::fs::read_to_string(out.join("final.snap.json")).unwrap();
     let scene = dir.path().join("cohesive.toml");
     std::fs::write(

@@ -173,6 +173,69 @@ fn external_dumps_analyze_to_their_golden_values() {
     }
 }
 
+/// `analyze --moduli` on the final dumps of each external code (tests/fixtures/xcode-smoke/):
+/// the law comes from the embedded scene the snapshot names. The moduli lie between their
+/// Reuss and Voigt bounds (GRC08 (12)–(14)), and, as AR07 §IV.D found on its frictional
+/// packings, the backbone's only mechanisms are the 3 global translations and one rolling
+/// motion per divalent sphere: K = 3 + n·x_2 (measured 4, 4, 6, 7 on these four states).
+/// A snapshot of an unknown scene needs `--scene`, and `--scene` needs `--moduli`.
+#[test]
+fn external_dumps_have_moduli_within_bounds_and_only_divalent_mechanisms() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tmp = tempfile::tempdir().unwrap();
+    let snap = tmp.path().join("s.json");
+    for code in ["lammps", "lammps-2025", "liggghts", "yade"] {
+        let out = Command::cargo_bin("grainbench")
+            .unwrap()
+            .args(["analyze", "--json", "--moduli", "--from", code])
+            .arg(root.join("tests/fixtures/xcode-smoke").join(code))
+            .arg("--write")
+            .arg(&snap)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{code}");
+        let a: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let m = &a["moduli"]["Ok"];
+        let g = |k: &str| m[k].as_f64().unwrap();
+        assert!(
+            g("reuss_bulk") <= g("bulk") && g("bulk") <= g("voigt_bulk"),
+            "{code}: {m}"
+        );
+        assert!(
+            0.0 < g("shear") && g("shear") <= g("voigt_shear"),
+            "{code}: {m}"
+        );
+        let divalent = (a["x_k"][2].as_f64().unwrap() * 256.0).round() as u64;
+        assert_eq!(m["rigidity"]["mechanisms"], 3 + divalent, "{code}: {m}");
+    }
+    let text = std::fs::read_to_string(&snap).unwrap();
+    let own = tmp.path().join("own.json");
+    std::fs::write(
+        &own,
+        text.replace("\"scene\":\"xcode-smoke\"", "\"scene\":\"my-own\""),
+    )
+    .unwrap();
+    let run = |args: &[&str]| {
+        Command::cargo_bin("grainbench")
+            .unwrap()
+            .arg("analyze")
+            .args(args)
+            .arg(&own)
+            .assert()
+    };
+    run(&["--moduli"])
+        .code(2)
+        .stderr(predicates::str::contains("`my-own` is not embedded"))
+        .stderr(predicates::str::contains("--scene FILE|NAME"));
+    run(&["--scene", "xcode-smoke"])
+        .code(2)
+        .stderr(predicates::str::contains("add --moduli"));
+    run(&["--moduli", "--scene", "grc07-cohesive-small"])
+        .code(2)
+        .stderr(predicates::str::contains("a 2D scene for a 3D snapshot"));
+    run(&["--moduli", "--scene", "xcode-smoke"]).success();
+}
+
 /// Issue 18: a dump cut at a line end, or holding a NaN, used to analyse with exit 0 to a
 /// wrong z (2.109 instead of 4.453 for the LAMMPS fixture cut to 300 lines). Now each is an
 /// exit-2 error naming the file, the line and what was expected.

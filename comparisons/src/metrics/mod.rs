@@ -50,10 +50,12 @@ pub mod force_distribution;
 pub mod fractal_fit;
 pub mod holes;
 mod math;
+pub mod moduli;
 mod neighbors;
 pub mod pressure;
 pub mod rattlers;
 pub mod series;
+pub mod stiffness;
 pub mod structure;
 
 #[cfg(test)]
@@ -69,6 +71,7 @@ pub use force_distribution::{ForceStats, PopulationStats};
 use grainbench_engine::network::wrapped_axes;
 use grainbench_engine::snapshot::{Contact, Snapshot};
 use math::mean;
+use moduli::{elastic_moduli, Moduli};
 pub use pressure::{contact_pressure, Ar07Eq22, Grc07Eq18, Pressure, Rumpf};
 pub use rattlers::X_K_MIN_LEN;
 use rattlers::{contact_number_fractions, find_rattlers, Rule};
@@ -101,6 +104,9 @@ pub struct Options {
     pub seed: u64,
     /// Mesh spacing, in a, of the density field of 2D cohesive packings (GRC07 §V.C).
     pub density_spacing: f64,
+    /// The contact stiffnesses, to compute the elastic moduli ([`moduli`]); `None` skips them
+    /// (a snapshot does not carry its law: `analyze --moduli` takes it from the scene).
+    pub moduli: Option<stiffness::ContactStiffness>,
 }
 
 impl Default for Options {
@@ -118,6 +124,7 @@ impl Default for Options {
             fix_rattlers: true,
             seed: DEFAULT_SEED,
             density_spacing: density::DEFAULT_SPACING,
+            moduli: None,
         }
     }
 }
@@ -185,6 +192,9 @@ pub struct Analysis {
     pub local_environments: Option<Vec<LocalEnvironments>>,
     /// Density correlations, fractal dimension and holes (GRC07 §V); 2D cohesive packings.
     pub density: Option<DensityCorrelations>,
+    /// Elastic moduli and rigidity of the backbone (GRC08 §VI, GRC07 App. A), when
+    /// [`Options::moduli`] gives the stiffnesses; the error says why they could not be computed.
+    pub moduli: Option<Result<Moduli, String>>,
     /// Measured pressure and the exact relations.
     pub pressure: Pressure,
 }
@@ -200,8 +210,9 @@ impl Analysis {
     /// `n_cr`, `fcc_110`…`fcc_140`, `hcp_110`…`hcp_140`, `dis_F_110`…`dis_F_140` (and `dis_D_…`,
     /// `dis_B_…`: AR07 T.VII–T.VIII at d_c = 1.1a…1.4a, 3D), `z_plus`, `z_minus`, `z_zero`,
     /// `clusters`, `wrapped_axes`, `N_plus`, `N_plus_rms`, `N_minus`, `N_minus_rms` (GRC07 T.VI,
-    /// units of F0), `d_F`, `xi`, `R_w` (GRC07 T.VII and (30), lengths in a), `pressure`
-    /// (measured).
+    /// units of F0), `d_F`, `xi`, `R_w` (GRC07 T.VII and (30), lengths in a), `B`, `G`, `B_V`,
+    /// `G_V`, `B_R`, `E95`, `mechanisms`, `H`, `H_over_Nf` (GRC08 §VI, GRC07 App. A; with
+    /// [`Options::moduli`]), `pressure` (measured).
     pub fn metric_values(&self) -> Vec<(String, f64)> {
         let mut v: Vec<(String, f64)> = Vec::new();
         let mut put = |k: &str, x: Option<f64>| {
@@ -279,6 +290,19 @@ impl Analysis {
             put("d_F", c.fit.as_ref().map(|f| f.model.d_f));
             put("xi", c.fit.as_ref().map(|f| f.model.xi));
             put("R_w", c.holes.weighted_radius);
+        }
+        if let Some(Ok(m)) = &self.moduli {
+            put("B", Some(m.bulk));
+            put("G", Some(m.shear));
+            put("B_V", Some(m.voigt_bulk));
+            put("G_V", Some(m.voigt_shear));
+            put("B_R", m.reuss_bulk);
+            put("E95", m.energy_95);
+            if let Some(r) = &m.rigidity {
+                put("mechanisms", Some(r.mechanisms as f64));
+                put("H", Some(r.indeterminacy as f64));
+                put("H_over_Nf", Some(r.indeterminacy as f64 / r.dofs as f64));
+            }
         }
         put("pressure", self.pressure.measured);
         v
@@ -469,6 +493,7 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         density_correlations(lengths, position, radius, a, phi, opts.density_spacing)
     });
     let fixed_rattlers = fixed.map(|(f, _)| f);
+    let moduli = opts.moduli.map(|law| elastic_moduli(snap, &backbone, &law));
 
     let pressure = pressure::measure(snap, z, phi, mean_n);
 
@@ -498,6 +523,7 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         cohesive_split,
         forces,
         structure,
+        moduli,
         bond_order,
         local_environments,
         density,

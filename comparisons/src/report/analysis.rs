@@ -312,6 +312,59 @@ pub fn to_markdown(a: &Analysis) -> String {
             ),
         );
     }
+    match &a.moduli {
+        Some(Ok(m)) => {
+            row(
+                "B, G",
+                format!("{}, {}", sig6(m.bulk), sig6(m.shear)),
+                &format!(
+                    "elastic moduli from K·U = F^ext (GRC08 (6)): {} interactions ({} distant), {} degrees of freedom; C_αβ = [{}]",
+                    m.interactions,
+                    m.distant,
+                    m.dofs,
+                    m.stiffness
+                        .iter()
+                        .map(|r| r.iter().map(|x| sig6(*x)).collect::<Vec<_>>().join(", "))
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                ),
+            );
+            row(
+                "B^V, G^V",
+                format!("{}, {}", sig6(m.voigt_bulk), sig6(m.voigt_shear)),
+                &format!(
+                    "Voigt (GRC08 (12), affine): B^V/B = {}, G^V/G = {}",
+                    sig6(m.voigt_bulk / m.bulk),
+                    sig6(m.voigt_shear / m.shear)
+                ),
+            );
+            row(
+                "B^R",
+                opt(m.reuss_bulk),
+                &format!(
+                    "Reuss (GRC08 (13)–(14), forces scaled with P): B/B^R = {}",
+                    opt(m.reuss_bulk.map(|r| m.bulk / r))
+                ),
+            );
+            row(
+                "95 % of the energy",
+                m.energy_95.map(pct).unwrap_or_else(|| "n/a".into()),
+                "of the contacts, by decreasing energy, in the response to an isotropic pressure increment (GRC08 §VI.E)",
+            );
+            if let Some(r) = &m.rigidity {
+                row(
+                    "mechanisms K, indeterminacy H",
+                    format!("{}, {}", r.mechanisms, r.indeterminacy),
+                    &format!(
+                        "cell fixed, GRC07 App. A: N_f + H = M + K with N_f = {}, M = {} (K counts the global translations)",
+                        r.dofs, r.constraints
+                    ),
+                );
+            }
+        }
+        Some(Err(e)) => row("B, G", "n/a".into(), e),
+        None => {}
+    }
     let p = &a.pressure;
     row("P measured", opt(p.measured), "tr σ_contact / d");
     row("P kinetic", opt(p.kinetic), "tr σ_kinetic / d");
