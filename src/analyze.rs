@@ -13,9 +13,11 @@ pub struct Extra<'a> {
     pub moduli: bool,
     /// The scene whose law gives the contact stiffnesses (default: the snapshot's scene).
     pub scene: Option<&'a str>,
+    /// Directory for the ParaView files of the snapshot.
+    pub vtk: Option<&'a Path>,
 }
 
-/// `grainbench analyze SNAPSHOT [--from CODE] [--write FILE] [--json] [--moduli [--scene S]]`.
+/// `grainbench analyze SNAPSHOT [--from CODE] [--write FILE] [--json] [--moduli [--scene S]] [--vtk DIR]`.
 pub fn analyze(
     path: &Path,
     json: bool,
@@ -52,6 +54,16 @@ pub fn analyze(
         bail!("--scene gives the law for --moduli: add --moduli");
     }
     let a = measure(&snap, &opts);
+    if let Some(dir) = extra.vtk {
+        let files = grainbench_comparisons::report::vtk::write_vtk(&snap, dir)
+            .with_context(|| format!("--vtk: writing into {}", dir.display()))?;
+        eprintln!(
+            "wrote {}, {}, {} (ParaView)",
+            files.collection.display(),
+            files.particles.display(),
+            files.contacts.display()
+        );
+    }
     if json {
         println!("{}", serde_json::to_string_pretty(&a)?);
     } else {

@@ -91,6 +91,11 @@ enum Command {
         /// stiffnesses (default: the scene the snapshot names).
         #[arg(long, value_name = "SCENE")]
         scene: Option<String>,
+        /// Also write the snapshot for ParaView into DIR: particles.vtu (grains with diameter,
+        /// velocity, spin, contact count), contacts.vtu (lines with normal and tangential
+        /// force) and snapshot.pvd grouping them.
+        #[arg(long, value_name = "DIR")]
+        vtk: Option<PathBuf>,
     },
     /// List the embedded scenes.
     Scenes,
@@ -297,6 +302,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             write,
             moduli,
             scene,
+            vtk,
         } => analyze::analyze(
             &snapshot,
             json,
@@ -305,6 +311,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             &analyze::Extra {
                 moduli,
                 scene: scene.as_deref(),
+                vtk: vtk.as_deref(),
             },
         ),
         Command::Reproduce {

@@ -236,6 +236,40 @@ fn external_dumps_have_moduli_within_bounds_and_only_divalent_mechanisms() {
     run(&["--moduli", "--scene", "xcode-smoke"]).success();
 }
 
+/// `analyze --vtk DIR` on another code's dumps: the ParaView files hold every grain and every
+/// listed contact of the state read.
+#[test]
+fn external_dumps_export_to_paraview() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tmp = tempfile::tempdir().unwrap();
+    let out = Command::cargo_bin("grainbench")
+        .unwrap()
+        .args(["analyze", "--json", "--from", "lammps"])
+        .arg(root.join("tests/fixtures/xcode-smoke/lammps"))
+        .arg("--vtk")
+        .arg(tmp.path().join("vtk"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let a: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let parts = std::fs::read_to_string(tmp.path().join("vtk/particles.vtu")).unwrap();
+    let contacts = std::fs::read_to_string(tmp.path().join("vtk/contacts.vtu")).unwrap();
+    let m = a["interactions"].as_u64().unwrap();
+    assert!(parts.contains("NumberOfPoints=\"256\" NumberOfCells=\"256\""));
+    assert!(contacts.contains(&format!(
+        "NumberOfPoints=\"{}\" NumberOfCells=\"{m}\"",
+        2 * m
+    )));
+    for name in ["diameter", "velocity", "spin", "contacts"] {
+        assert!(parts.contains(&format!("Name=\"{name}\"")), "{name}");
+    }
+    for name in ["normal_force", "tangential_force", "rolling_moment", "gap"] {
+        assert!(contacts.contains(&format!("Name=\"{name}\"")), "{name}");
+    }
+    let pvd = std::fs::read_to_string(tmp.path().join("vtk/snapshot.pvd")).unwrap();
+    assert!(pvd.contains("particles.vtu") && pvd.contains("contacts.vtu"));
+}
+
 /// Issue 18: a dump cut at a line end, or holding a NaN, used to analyse with exit 0 to a
 /// wrong z (2.109 instead of 4.453 for the LAMMPS fixture cut to 300 lines). Now each is an
 /// exit-2 error naming the file, the line and what was expected.

@@ -59,7 +59,7 @@ pub mod stiffness;
 pub mod structure;
 
 #[cfg(test)]
-mod fixtures;
+pub(crate) mod fixtures;
 #[cfg(test)]
 mod tests;
 

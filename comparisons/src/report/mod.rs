@@ -11,5 +11,6 @@ pub mod format;
 pub mod paper;
 pub mod plots;
 pub mod reproduction;
+pub mod vtk;
 
 pub use analysis::{to_json, to_markdown};
