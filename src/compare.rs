@@ -149,6 +149,7 @@ fn run_rust(
         // A harness scratch directory: a leftover checkpoint is not a run to keep.
         force: true,
         checkpoint_every: 60.0,
+        dump_every: None,
     };
     r.version = Some(format!("grainbench {}", env!("CARGO_PKG_VERSION")));
     let t = Instant::now();

@@ -65,6 +65,11 @@ enum Command {
         /// Seed of the initial state instead of the scene's.
         #[arg(long)]
         seed: Option<u64>,
+        /// Write a ParaView frame (grains and contacts, `.vtu`) every T of simulated time (the
+        /// first check at or after each multiple of T) into `<out>/vtk/`, listed in
+        /// `<out>/vtk/run.pvd`; a resumed run extends the series.
+        #[arg(long, value_name = "T")]
+        dump_every: Option<f64>,
     },
     /// Packing metrics of a snapshot: Φ, z, z*, x0, force moments, AR07 (22) / GRC07 (18) checks.
     Analyze {
@@ -284,14 +289,23 @@ fn dispatch(cli: Cli) -> Result<i32> {
             force,
             checkpoint_every,
             seed,
+            dump_every,
         } => {
             set_threads(threads)?;
+            if let Some(t) = dump_every {
+                if !(t.is_finite() && t > 0.0) {
+                    anyhow::bail!(
+                        "--dump-every {t}: give a positive time in the scene's reduced units"
+                    );
+                }
+            }
             let flags = RunFlags {
                 quiet,
                 report: true,
                 resume,
                 force,
                 checkpoint_every,
+                dump_every,
             };
             run::run_command(scene.as_deref(), out, seed, require_equilibrium, &flags)
         }
@@ -341,6 +355,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                     resume: false,
                     force: false,
                     checkpoint_every,
+                    dump_every: None,
                 },
             })
         }

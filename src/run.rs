@@ -3,9 +3,10 @@
 
 use crate::common::{analysis_of, install_stop_handler, load_scene, STOP};
 use anyhow::{bail, Context, Result};
+use grainbench_comparisons::report::vtk;
 use grainbench_engine::checkpoint::Checkpoint;
 use grainbench_engine::run::{
-    CheckpointSpec, Checks, Outcome, Progress, RunError, RunOptions, StepEnd,
+    CheckpointSpec, Checks, DumpSpec, Outcome, Progress, RunError, RunOptions, StepEnd,
 };
 use grainbench_engine::{snapshot, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -25,6 +26,8 @@ pub struct RunFlags {
     /// Start over even if the output directory holds the checkpoint of an unfinished run.
     pub force: bool,
     pub checkpoint_every: f64,
+    /// Write a ParaView frame every so much simulated time into `<out>/vtk/` (`--dump-every`).
+    pub dump_every: Option<f64>,
 }
 
 /// The checkpoint file of a run, in its output directory.
@@ -223,6 +226,28 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
             scene.stages().len()
         );
     }
+    // ParaView frames: written as they come, the series file rewritten after each.
+    let vtk_dir = out.join("vtk");
+    let mut dump_failed = false;
+    let mut frames = 0usize;
+    let mut on_dump = |snap: &snapshot::Snapshot| {
+        if dump_failed {
+            return;
+        }
+        let prefix = vtk::frame_prefix(snap.step);
+        let written = vtk::write_frame(snap, &vtk_dir, &prefix)
+            .and_then(|_| vtk::write_series(&vtk_dir, "run.pvd"));
+        match written {
+            Ok(n) => frames = n,
+            Err(e) => {
+                dump_failed = true;
+                eprintln!(
+                    "warning: --dump-every: writing into {} failed ({e}); no more frames are written",
+                    vtk_dir.display()
+                );
+            }
+        }
+    };
     let result = grainbench_engine::run_scene(
         scene,
         &mut RunOptions {
@@ -233,8 +258,19 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                 every: flags.checkpoint_every,
             }),
             resume,
+            dump: flags.dump_every.map(|every| DumpSpec {
+                every,
+                sink: &mut on_dump,
+                last: None,
+            }),
         },
     );
+    if flags.dump_every.is_some() && frames > 0 {
+        eprintln!(
+            "frames     {frames} in {} (ParaView: open run.pvd)",
+            vtk_dir.display()
+        );
+    }
     bar.finish_and_clear();
     let outcome = match result {
         Ok(o) => o,

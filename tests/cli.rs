@@ -157,6 +157,62 @@ fn same_seed_gives_identical_results_for_one_and_two_threads() {
     );
 }
 
+/// `run --dump-every T` writes a ParaView frame at the first check past each multiple of T
+/// (here T = 1 over 4 time units: t ≈ 0, 1, 2, 3) and `vtk/run.pvd` listing them in time order;
+/// the run itself is untouched (the final snapshot is bit-identical to one without frames).
+#[test]
+fn dump_every_writes_a_paraview_series_without_changing_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_file(dir.path(), "s.toml", SMALL_3D);
+    let mut finals = Vec::new();
+    for (name, extra) in [("plain", &[][..]), ("dumped", &["--dump-every", "1.0"][..])] {
+        let out = dir.path().join(name);
+        grainbench()
+            .arg("run")
+            .arg(&scene)
+            .args(["-q", "-j", "1"])
+            .args(extra)
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .success();
+        finals.push(std::fs::read(out.join("final.snap.json")).unwrap());
+    }
+    assert!(finals[0] == finals[1], "frames changed the run");
+    let vtk = dir.path().join("dumped/vtk");
+    let pvd = std::fs::read_to_string(vtk.join("run.pvd")).unwrap();
+    let times: Vec<f64> = pvd
+        .lines()
+        .filter(|l| l.contains("part=\"0\""))
+        .map(|l| l.split('"').nth(1).unwrap().parse().unwrap())
+        .collect();
+    assert!((4..=5).contains(&times.len()), "{pvd}");
+    for (k, t) in times.iter().enumerate() {
+        assert!(
+            *t >= k as f64 && *t < k as f64 + 0.5,
+            "frame {k} at t = {t}"
+        );
+    }
+    for line in pvd.lines().filter(|l| l.contains("file=")) {
+        let file = line
+            .split("file=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
+        assert!(vtk.join(file).is_file(), "{file}");
+    }
+    grainbench()
+        .arg("run")
+        .arg(&scene)
+        .args(["-q", "--dump-every", "0", "-o"])
+        .arg(dir.path().join("bad"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--dump-every 0"));
+}
+
 #[test]
 fn too_large_time_step_is_detected_and_last_good_state_kept() {
     let dir = tempfile::tempdir().unwrap();

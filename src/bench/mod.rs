@@ -123,6 +123,7 @@ fn child_run(a: &Args) -> Result<i32> {
         // A harness scratch directory: a leftover checkpoint is not a run to keep.
         force: true,
         checkpoint_every: 1e12,
+        dump_every: None,
     };
     Ok(run(&scene, out, &flags)?.0)
 }

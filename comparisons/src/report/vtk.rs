@@ -10,7 +10,10 @@
 //!   (2D on z; zero without rolling resistance), `gap`.
 //! - `snapshot.pvd`: both parts at the snapshot's time.
 //!
-//! 2D positions get z = 0. Every file is written atomically.
+//! A run's time series (`run --dump-every`) writes each frame as `step-<step>-particles.vtu` and
+//! `step-<step>-contacts.vtu` ([`write_frame`]) and `run.pvd` listing them all in time order
+//! ([`write_series`], which reads each frame's time back from its `TimeValue` field, so a
+//! resumed run extends the series). 2D positions get z = 0. Every file is written atomically.
 
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
 use std::fmt::Write as _;
@@ -26,21 +29,81 @@ pub struct VtkFiles {
 
 /// Writes `particles.vtu`, `contacts.vtu` and `snapshot.pvd` into `dir` (created if needed).
 pub fn write_vtk(snap: &Snapshot, dir: &Path) -> std::io::Result<VtkFiles> {
-    let files = VtkFiles {
-        particles: dir.join("particles.vtu"),
-        contacts: dir.join("contacts.vtu"),
-        collection: dir.join("snapshot.pvd"),
-    };
-    write_atomic(&files.particles, particles_vtu(snap).as_bytes())?;
-    write_atomic(&files.contacts, contacts_vtu(snap).as_bytes())?;
-    let pvd = format!(
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n    \
-         <DataSet timestep=\"{t}\" part=\"0\" file=\"particles.vtu\"/>\n    \
-         <DataSet timestep=\"{t}\" part=\"1\" file=\"contacts.vtu\"/>\n  </Collection>\n</VTKFile>\n",
-        t = snap.time
+    let (particles, contacts) = write_frame(snap, dir, "")?;
+    let collection = dir.join("snapshot.pvd");
+    write_atomic(
+        &collection,
+        collection_xml(&[(snap.time, "particles.vtu".into(), "contacts.vtu".into())]).as_bytes(),
+    )?;
+    Ok(VtkFiles {
+        particles,
+        contacts,
+        collection,
+    })
+}
+
+/// Writes `<prefix>particles.vtu` and `<prefix>contacts.vtu` into `dir`.
+pub fn write_frame(
+    snap: &Snapshot,
+    dir: &Path,
+    prefix: &str,
+) -> std::io::Result<(PathBuf, PathBuf)> {
+    let particles = dir.join(format!("{prefix}particles.vtu"));
+    let contacts = dir.join(format!("{prefix}contacts.vtu"));
+    write_atomic(&particles, particles_vtu(snap).as_bytes())?;
+    write_atomic(&contacts, contacts_vtu(snap).as_bytes())?;
+    Ok((particles, contacts))
+}
+
+/// The prefix of a run's frame at `step`.
+pub fn frame_prefix(step: u64) -> String {
+    format!("step-{step:012}-")
+}
+
+/// Writes `dir/<name>` listing every `step-*-particles.vtu` frame in `dir` (and its contacts
+/// file) at the time stored in the frame, in time order. Returns the number of frames.
+pub fn write_series(dir: &Path, name: &str) -> std::io::Result<usize> {
+    let mut frames = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let file = entry?.file_name().to_string_lossy().into_owned();
+        let Some(prefix) = file
+            .strip_suffix("particles.vtu")
+            .filter(|p| p.starts_with("step-"))
+        else {
+            continue;
+        };
+        let text = std::fs::read_to_string(dir.join(&file))?;
+        if let Some(t) = time_value(&text) {
+            frames.push((t, file.clone(), format!("{prefix}contacts.vtu")));
+        }
+    }
+    frames.sort_by(|a, b| a.0.total_cmp(&b.0).then_with(|| a.1.cmp(&b.1)));
+    write_atomic(&dir.join(name), collection_xml(&frames).as_bytes())?;
+    Ok(frames.len())
+}
+
+/// The `TimeValue` field of a `.vtu` written here.
+fn time_value(vtu: &str) -> Option<f64> {
+    let at = vtu.find("Name=\"TimeValue\"")?;
+    let body = &vtu[at..];
+    let open = body.find('>')? + 1;
+    let close = body.find("</DataArray>")?;
+    body[open..close].trim().parse().ok()
+}
+
+/// A `.pvd` collection: (time, particles file, contacts file) per frame, as parts 0 and 1.
+fn collection_xml(frames: &[(f64, String, String)]) -> String {
+    let mut out = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n",
     );
-    write_atomic(&files.collection, pvd.as_bytes())?;
-    Ok(files)
+    for (t, p, c) in frames {
+        let _ = writeln!(
+            out,
+            "    <DataSet timestep=\"{t:e}\" part=\"0\" file=\"{p}\"/>\n    <DataSet timestep=\"{t:e}\" part=\"1\" file=\"{c}\"/>"
+        );
+    }
+    out.push_str("  </Collection>\n</VTKFile>\n");
+    out
 }
 
 /// Three components of a 2D or 3D vector (z = 0 in 2D).
@@ -75,11 +138,12 @@ fn array(out: &mut String, name: &str, components: usize, values: impl Iterator<
     out.push_str("\n        </DataArray>\n");
 }
 
-fn header(out: &mut String, points: usize, cells: usize) {
+fn header(out: &mut String, time: f64, points: usize, cells: usize) {
     let _ = write!(
         out,
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n  \
-         <UnstructuredGrid>\n    <Piece NumberOfPoints=\"{points}\" NumberOfCells=\"{cells}\">\n"
+         <UnstructuredGrid>\n    <FieldData>\n      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{time:e}</DataArray>\n    </FieldData>\n    \
+         <Piece NumberOfPoints=\"{points}\" NumberOfCells=\"{cells}\">\n"
     );
 }
 
@@ -111,7 +175,7 @@ fn particles_vtu(snap: &Snapshot) -> String {
         count[c.j] += 1;
     }
     let mut out = String::new();
-    header(&mut out, n, n);
+    header(&mut out, snap.time, n, n);
     out.push_str("      <Points>\n");
     array(
         &mut out,
@@ -144,7 +208,7 @@ fn contacts_vtu(snap: &Snapshot) -> String {
     let p = &snap.particles.position;
     let m = snap.contacts.len();
     let mut out = String::new();
-    header(&mut out, 2 * m, m);
+    header(&mut out, snap.time, 2 * m, m);
     out.push_str("      <Points>\n");
     let ends = snap.contacts.iter().flat_map(|c| {
         let a = xyz(&p[c.i]);
@@ -240,5 +304,29 @@ mod tests {
         assert_eq!(numbers(&cont, "offsets"), vec![2.0]);
         let pvd = std::fs::read_to_string(&files.collection).unwrap();
         assert!(pvd.contains("file=\"particles.vtu\"") && pvd.contains("file=\"contacts.vtu\""));
+    }
+
+    /// A series lists its frames in time order, with the times they carry, whatever order
+    /// they were written in; other files are ignored.
+    #[test]
+    fn series_in_time_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut snap = two_disks();
+        for (step, t) in [(30, 3.0), (10, 1.0), (20, 2.5)] {
+            snap.step = step;
+            snap.time = t;
+            write_frame(&snap, dir.path(), &frame_prefix(step)).unwrap();
+        }
+        write_vtk(&snap, dir.path()).unwrap();
+        assert_eq!(write_series(dir.path(), "run.pvd").unwrap(), 3);
+        let pvd = std::fs::read_to_string(dir.path().join("run.pvd")).unwrap();
+        let times: Vec<&str> = pvd
+            .lines()
+            .filter(|l| l.contains("part=\"0\""))
+            .map(|l| l.split('"').nth(1).unwrap())
+            .collect();
+        assert_eq!(times, ["1e0", "2.5e0", "3e0"]);
+        assert!(pvd.contains("step-000000000020-contacts.vtu"));
+        assert!(!pvd.contains("\"particles.vtu\""));
     }
 }

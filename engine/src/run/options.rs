@@ -2,6 +2,7 @@
 
 use super::checkpoint::Checkpoint;
 use super::report::Progress;
+use crate::snapshot::Snapshot;
 use std::sync::atomic::AtomicBool;
 
 /// Periodic checkpoints on disk.
@@ -11,6 +12,17 @@ pub struct CheckpointSpec {
     /// Wall-clock seconds between checkpoints (one is also written at each stage start that
     /// runs hard-sphere dynamics, and when the run is stopped).
     pub every: f64,
+}
+
+/// Snapshots taken during a run (`run --dump-every`).
+pub struct DumpSpec<'a> {
+    /// Time (reduced units) between snapshots: one at the first check at or after each
+    /// multiple of `every`.
+    pub every: f64,
+    /// Receives each snapshot (status `running`).
+    pub sink: &'a mut (dyn FnMut(&Snapshot) + Send),
+    /// Index ⌊t/every⌋ of the last snapshot taken.
+    pub last: Option<u64>,
 }
 
 /// Options of a run.
@@ -24,4 +36,6 @@ pub struct RunOptions<'a> {
     pub checkpoint: Option<CheckpointSpec>,
     /// Continue from a checkpoint of the same scene.
     pub resume: Option<Checkpoint>,
+    /// Snapshots every so much simulated time.
+    pub dump: Option<DumpSpec<'a>>,
 }

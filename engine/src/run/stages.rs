@@ -375,6 +375,19 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     wrapped_axes,
                 });
             }
+            if let Some(d) = opts.dump.as_mut() {
+                let frame = (sys.time / d.every).floor() as u64;
+                if d.last != Some(frame) {
+                    d.last = Some(frame);
+                    (d.sink)(&snapshot_of(
+                        sys,
+                        &scene.name,
+                        &num,
+                        "running",
+                        ctx.pressure,
+                    ));
+                }
+            }
             // Time step past stability: the fastest modes flip sign at every step (the
             // integrator's amplification is real and negative) and, held by the nonlinear
             // contacts, oscillate for ever instead of blowing up: a packing that never
