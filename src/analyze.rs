@@ -76,11 +76,12 @@ pub fn analyze(
 /// else from the embedded scene the snapshot names.
 fn stiffness_of(snap: &Snapshot, scene: Option<&str>) -> Result<ContactStiffness> {
     let spec = scene.unwrap_or(&snap.scene);
-    let sc = load_scene(spec).with_context(|| {
-        format!(
+    let sc = load_scene(spec).with_context(|| match scene {
+        Some(s) => format!("--scene {s}"),
+        None => format!(
             "--moduli needs the contact law, which a snapshot does not carry: its scene `{}` is not embedded; give the scene with --scene FILE|NAME",
             snap.scene
-        )
+        ),
     })?;
     contact_stiffness(&sc, snap).map_err(|e| anyhow!("--scene {spec}: {e}"))
 }

@@ -233,6 +233,9 @@ fn external_dumps_have_moduli_within_bounds_and_only_divalent_mechanisms() {
     run(&["--moduli", "--scene", "grc07-cohesive-small"])
         .code(2)
         .stderr(predicates::str::contains("a 2D scene for a 3D snapshot"));
+    run(&["--moduli", "--scene", "no/such/scene.toml"])
+        .code(2)
+        .stderr(predicates::str::contains("--scene no/such/scene.toml"));
     run(&["--moduli", "--scene", "xcode-smoke"]).success();
 }
 
