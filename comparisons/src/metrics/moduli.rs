@@ -68,6 +68,13 @@ pub fn elastic_moduli(
     let eps0 = net.strain_dof().unwrap_or(net.dofs);
     let volume: f64 = snap.cell.lengths.iter().product();
     let mut entries = net.matrix(false);
+    // Voigt: the strain block alone, before the floppy-mode cost below.
+    let mut voigt = vec![vec![0.0; d]; d];
+    for &(r, c, v) in &entries {
+        if r >= eps0 && c >= eps0 {
+            voigt[r - eps0][c - eps0] = v / volume;
+        }
+    }
 
     // Floppy modes: a small cost on every diagonal entry, per block.
     let mut top = [0.0_f64; 2];
@@ -117,13 +124,6 @@ pub fn elastic_moduli(
         .collect();
     let (bulk, shear) = bulk_shear(&stiffness);
 
-    // Voigt: the strain block alone.
-    let mut voigt = vec![vec![0.0; d]; d];
-    for &(r, cc, v) in &net.matrix(false) {
-        if r >= eps0 && cc >= eps0 {
-            voigt[r - eps0][cc - eps0] = v / volume;
-        }
-    }
     let (voigt_bulk, voigt_shear) = bulk_shear(&voigt);
 
     // GRC08 §VI.E: the response to an isotropic pressure increment (Δσ_α = −1).
