@@ -16,6 +16,7 @@ mod analyze;
 mod bench;
 mod common;
 mod compare;
+mod consolidation;
 mod external;
 mod reproduce;
 mod run;
@@ -70,6 +71,10 @@ enum Command {
         /// `<out>/vtk/run.pvd`; a resumed run extends the series.
         #[arg(long, value_name = "T")]
         dump_every: Option<f64>,
+        /// Write the state at the end of each stage into `<out>/stages/stage-KKK.snap.json`
+        /// (K as in the progress line, from 0): the points of a pressure program.
+        #[arg(long)]
+        stage_snapshots: bool,
     },
     /// Packing metrics of a snapshot: Φ, z, z*, x0, force moments, AR07 (22) / GRC07 (18) checks.
     Analyze {
@@ -290,6 +295,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             checkpoint_every,
             seed,
             dump_every,
+            stage_snapshots,
         } => {
             set_threads(threads)?;
             if let Some(t) = dump_every {
@@ -306,6 +312,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 force,
                 checkpoint_every,
                 dump_every,
+                stage_snapshots,
             };
             run::run_command(scene.as_deref(), out, seed, require_equilibrium, &flags)
         }
@@ -356,6 +363,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                     force: false,
                     checkpoint_every,
                     dump_every: None,
+                    stage_snapshots: false,
                 },
             })
         }

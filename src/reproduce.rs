@@ -2,6 +2,7 @@
 //! (checkpointed, resumable), measures every metric with the same code as `analyze`, and
 //! writes the table against the published values (golden/paper-values.toml) and the plots.
 
+use crate::consolidation;
 use crate::run::{run, RunFlags, CHECKPOINT};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::metrics::{analyze, Analysis};
@@ -117,6 +118,8 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         }
         let flags = RunFlags {
             resume: dir.join(CHECKPOINT).exists(),
+            // The levels of a pressure program (GRC08 §II.D.2) are the points of its curve.
+            stage_snapshots: consolidation::has_program(&scene),
             ..a.flags.clone()
         };
         let (code, outcome) = run(&scene, &dir, &flags)?;
@@ -141,7 +144,19 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         .iter()
         .map(|r| analyze(&r.snapshot, &Default::default()))
         .collect();
-    let values: Vec<Vec<(String, f64)>> = analyses.iter().map(|a| a.metric_values()).collect();
+    let mut values: Vec<Vec<(String, f64)>> = analyses.iter().map(|a| a.metric_values()).collect();
+    // GRC08 §III: the consolidation curve of each seed and its fit by GRC08 (9).
+    let mut curves = Vec::new();
+    if consolidation::has_program(&base) {
+        for (r, v) in runs.iter().zip(values.iter_mut()) {
+            let mut scene = base.clone();
+            scene.seed = r.seed;
+            let levels =
+                consolidation::levels(&scene, &r.steps, &out.join(format!("seed-{}", r.seed)))?;
+            v.extend(consolidation::values(&levels));
+            curves.push((r.seed, levels));
+        }
+    }
     let table = reproduction::build(&state_key, &values)
         .with_context(|| format!("building the table of {state_key}"))?;
     std::fs::create_dir_all(&out)?;
@@ -149,7 +164,14 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     snapshot::write_atomic(&out.join("report.csv"), table.to_csv().as_bytes())?;
     snapshot::write_atomic(&out.join("report.json"), table.to_json().as_bytes())?;
     let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
-    let plotted = write_plots(&out, &labels, &analyses);
+    let mut plotted = write_plots(&out, &labels, &analyses);
+    if !curves.is_empty() {
+        plotted.push(consolidation::write_csv(&out, &curves)?);
+        match consolidation::plot(&out, &curves, consolidation::paper_law(&state_key)) {
+            Ok(files) => plotted.extend(files),
+            Err(e) => eprintln!("warning: no consolidation plot: {e}"),
+        }
+    }
     let not_equilibrated: Vec<u64> = runs
         .iter()
         .filter(|r| r.status != "equilibrium")
@@ -170,7 +192,14 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         let path = record(a, &scene_name, &base, &state_key, &runs, &values, &table)?;
         println!("recorded   {}", path.display());
         // The table and the vector plots go beside the record, for reading on the web.
-        for f in ["report.md", "pf.svg", "gr.svg", "ik.svg"] {
+        for f in [
+            "report.md",
+            "pf.svg",
+            "gr.svg",
+            "ik.svg",
+            "consolidation.svg",
+            "consolidation.csv",
+        ] {
             let (from, to) = (out.join(f), path.with_file_name(f));
             if from.exists() {
                 let bytes = std::fs::read(&from)?;

@@ -6,7 +6,8 @@ use anyhow::{bail, Context, Result};
 use grainbench_comparisons::report::vtk;
 use grainbench_engine::checkpoint::Checkpoint;
 use grainbench_engine::run::{
-    CheckpointSpec, Checks, DumpSpec, Outcome, Progress, RunError, RunOptions, StepEnd,
+    CheckpointSpec, Checks, DumpSpec, Outcome, Progress, RunError, RunOptions, StageEndHook,
+    StepEnd, StepReport,
 };
 use grainbench_engine::{snapshot, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -28,6 +29,16 @@ pub struct RunFlags {
     pub checkpoint_every: f64,
     /// Write a ParaView frame every so much simulated time into `<out>/vtk/` (`--dump-every`).
     pub dump_every: Option<f64>,
+    /// Write the state at the end of each stage into `<out>/stages/` (`--stage-snapshots`).
+    pub stage_snapshots: bool,
+}
+
+/// The folder of the stage-end snapshots, in a run's output directory.
+pub const STAGES: &str = "stages";
+
+/// The snapshot of the state at the end of stage `index` (0-based, as in `Scene::stages`).
+pub fn stage_file(index: usize) -> String {
+    format!("stage-{index:03}.snap.json")
 }
 
 /// The checkpoint file of a run, in its output directory.
@@ -248,6 +259,26 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
             }
         }
     };
+    // Stage-end states: each written atomically as its stage ends, so a resumed run keeps
+    // those of the stages before it.
+    let stage_dir = out.join(STAGES);
+    let mut stage_failed = false;
+    let mut on_stage_end = |r: &StepReport, snap: &snapshot::Snapshot| {
+        if stage_failed {
+            return;
+        }
+        let path = stage_dir.join(stage_file(r.index));
+        let written = std::fs::create_dir_all(&stage_dir)
+            .map_err(anyhow::Error::from)
+            .and_then(|_| snap.write(&path).map_err(anyhow::Error::from));
+        if let Err(e) = written {
+            stage_failed = true;
+            eprintln!(
+                "warning: --stage-snapshots: writing {} failed ({e}); no more stage states are written",
+                path.display()
+            );
+        }
+    };
     let result = grainbench_engine::run_scene(
         scene,
         &mut RunOptions {
@@ -263,6 +294,9 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                 sink: &mut on_dump,
                 last: None,
             }),
+            stage_end: flags
+                .stage_snapshots
+                .then_some(&mut on_stage_end as &mut StageEndHook),
         },
     );
     if flags.dump_every.is_some() && frames > 0 {

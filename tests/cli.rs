@@ -213,6 +213,56 @@ fn dump_every_writes_a_paraview_series_without_changing_the_run() {
         .stderr(predicate::str::contains("--dump-every 0"));
 }
 
+/// `run --stage-snapshots` writes the state at the end of each stage: for a pressure program
+/// (unrolled into one stage per level) one snapshot per level, under that level's pressure, in
+/// the order of the summary's stage reports; the last is the final state.
+#[test]
+fn stage_snapshots_write_each_level_of_a_pressure_program() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = SMALL_3D.replace(
+        "kind = \"compress\"\npressure = 1.0\ninertia_cap = 0.05\nmax_time = 4.0",
+        "kind = \"pressure-program\"\nfrom = 1.0\nto = 4.0\nfactor = 2.0\ninertia_cap = 0.05\nmax_time = 1.5",
+    );
+    assert!(text.contains("pressure-program"));
+    let scene = scene_file(dir.path(), "program.toml", &text);
+    let out = dir.path().join("out");
+    grainbench()
+        .arg("run")
+        .arg(&scene)
+        .args(["-q", "-j", "1", "--stage-snapshots", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let reports = summary["steps"].as_array().expect("stage reports");
+    assert_eq!(reports.len(), 3, "{summary}");
+    let mut states = Vec::new();
+    for (k, (level, report)) in [1.0, 2.0, 4.0].iter().zip(reports).enumerate() {
+        let path = out.join(format!("stages/stage-{k:03}.snap.json"));
+        let snap: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        assert_eq!(f(&snap, &["pressure_target"]), *level, "{}", path.display());
+        let start = states.last().copied().unwrap_or(0.0);
+        assert!((f(&snap, &["time"]) - start - f(report, &["time"])).abs() < 1e-9);
+        states.push(f(&snap, &["time"]));
+        let a = analyze_json(&path);
+        assert_eq!(
+            f(&a, &["packing_fraction"]),
+            f(report, &["checks", "packing_fraction"]),
+            "stage {k}"
+        );
+    }
+    let last: Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("stages/stage-002.snap.json")).unwrap(),
+    )
+    .unwrap();
+    let fin: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("final.snap.json")).unwrap())
+            .unwrap();
+    assert_eq!(last["particles"], fin["particles"]);
+    assert!(!out.join("stages/stage-003.snap.json").exists());
+}
+
 #[test]
 fn too_large_time_step_is_detected_and_last_good_state_kept() {
     let dir = tempfile::tempdir().unwrap();

@@ -145,17 +145,7 @@ impl LeastSquaresProblem<f64, Dyn, U4> for Problem {
     }
 
     fn jacobian(&self) -> Option<nalgebra::OMatrix<f64, Dyn, U4>> {
-        // Central differences: the model is smooth in all four parameters.
-        let mut j = nalgebra::OMatrix::<f64, Dyn, U4>::zeros(self.k.len());
-        for c in 0..4 {
-            let h = 1e-6 * self.p[c].abs().max(1e-3);
-            let (mut lo, mut hi) = (self.p, self.p);
-            lo[c] -= h;
-            hi[c] += h;
-            let d = (self.residuals_at(&hi) - self.residuals_at(&lo)) / (2.0 * h);
-            j.set_column(c, &d);
-        }
-        j.iter().all(|x| x.is_finite()).then_some(j)
+        super::math::central_jacobian4(&self.p, self.k.len(), |x| self.residuals_at(x))
     }
 }
 

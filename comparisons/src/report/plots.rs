@@ -88,12 +88,26 @@ pub struct Series<'a> {
     pub label: &'a str,
     /// The points.
     pub points: &'a [(f64, f64)],
+    /// How this series is drawn, if not as the plot's [`LinePlot::marks`] say.
+    pub marks: Option<Marks>,
 }
 
 impl<'a> Series<'a> {
     /// A series from a label and its points.
     pub fn new(label: &'a str, points: &'a [(f64, f64)]) -> Self {
-        Series { label, points }
+        Series {
+            label,
+            points,
+            marks: None,
+        }
+    }
+
+    /// The same series drawn with `marks` whatever the plot's.
+    pub fn with_marks(self, marks: Marks) -> Self {
+        Series {
+            marks: Some(marks),
+            ..self
+        }
     }
 }
 
@@ -140,6 +154,8 @@ pub struct LinePlot<'a> {
     pub y_range: Option<(f64, f64)>,
     /// Lines, markers or both.
     pub marks: Marks,
+    /// Where the legend goes (upper right unless the curves are there).
+    pub legend_lower_right: bool,
 }
 
 impl<'a> LinePlot<'a> {
@@ -160,6 +176,7 @@ impl<'a> LinePlot<'a> {
             x_range: None,
             y_range: None,
             marks: Marks::Lines,
+            legend_lower_right: false,
         }
     }
 }
@@ -273,6 +290,7 @@ pub fn force_distribution(
         y_axis: Axis::Log,
         x_range: None,
         y_range: None,
+        legend_lower_right: false,
     };
     write_plot(out, &spec)
 }
@@ -300,6 +318,7 @@ pub fn pair_correlation(
         y_axis: Axis::Linear,
         x_range: None,
         y_range,
+        legend_lower_right: false,
     };
     write_plot(out, &spec)
 }
@@ -314,12 +333,13 @@ pub fn line_plot(out: &Path, plot: &LinePlot) -> Result<PlotFiles, PlotError> {
             .series
             .iter()
             .enumerate()
-            .map(|(i, s)| Curve::new(s, PALETTE[i % PALETTE.len()], plot.marks))
+            .map(|(i, s)| Curve::new(s, PALETTE[i % PALETTE.len()], s.marks.unwrap_or(plot.marks)))
             .collect(),
         x_axis: plot.x_axis,
         y_axis: plot.y_axis,
         x_range: plot.x_range,
         y_range: plot.y_range,
+        legend_lower_right: plot.legend_lower_right,
     };
     write_plot(out, &spec)
 }
@@ -358,6 +378,7 @@ struct Spec<'a> {
     y_axis: Axis,
     x_range: Option<(f64, f64)>,
     y_range: Option<(f64, f64)>,
+    legend_lower_right: bool,
 }
 
 impl Spec<'_> {
@@ -550,7 +571,11 @@ where
         .label_font((FONT_FAMILY, 15))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
+        .position(if spec.legend_lower_right {
+            SeriesLabelPosition::LowerRight
+        } else {
+            SeriesLabelPosition::UpperRight
+        })
         .draw()
         .map_err(err)?;
     Ok(())

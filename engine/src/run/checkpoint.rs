@@ -3,8 +3,9 @@
 //! complete integrator state ([`crate::system::State`]: positions, velocities, forces, cell,
 //! neighbour list and contact history). Binary (bincode), written atomically, so an
 //! interrupted write leaves the previous checkpoint intact, and closed by a CRC-32 of all the
-//! bytes before it (version 4), so a damaged file is refused instead of resuming a different
-//! packing (issue 18).
+//! bytes before it (since version 4), so a damaged file is refused instead of resuming a
+//! different packing (issue 18). Version 5: the stage watch keeps the pressures of
+//! `relax.mean_stress`; older checkpoints are refused by their version, not misread.
 
 use super::report::StepReport;
 use crate::scene::Scene;
@@ -12,9 +13,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 pub const FORMAT: &str = "grainbench-checkpoint";
-pub const VERSION: u32 = 4;
-/// Version 3 (no checksum) still resumes.
-const UNCHECKED_VERSION: u32 = 3;
+pub const VERSION: u32 = 5;
 
 /// Where the run stands.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -65,11 +64,10 @@ impl Checkpoint {
         };
         let (header, payload): (Header, Vec<u8>) =
             bincode::deserialize(&bytes).map_err(|e| damaged(e.to_string()))?;
-        if !sealed && header.version != UNCHECKED_VERSION {
+        if !sealed {
             return Err(damaged("checksum mismatch".into()));
         }
-        let version_ok = header.version == VERSION || header.version == UNCHECKED_VERSION;
-        if header.format != FORMAT || !version_ok {
+        if header.format != FORMAT || header.version != VERSION {
             return Err(format!(
                 "{} is a {} v{} file; this grainbench reads {FORMAT} v{VERSION}",
                 path.display(),
@@ -162,13 +160,14 @@ mod tests {
         assert!(Checkpoint::read(&path).unwrap_err().contains("damaged"));
     }
 
-    /// Checkpoints of version 3, written before the checksum, still resume.
+    /// Checkpoints of an older version (4: a payload without the stage watch's pressures) are
+    /// refused by their version, naming the one this build reads.
     #[test]
-    fn version_3_checkpoints_still_read() {
+    fn older_versions_are_refused_by_version() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("checkpoint.bin");
-        let bytes = bincode::serialize(&(header(3), vec![1u8, 2, 3])).unwrap();
-        std::fs::write(&path, bytes).unwrap();
-        assert_eq!(Checkpoint::read(&path).unwrap().payload, vec![1, 2, 3]);
+        Checkpoint::write(&path, &header(4), &[1u8, 2, 3]).unwrap();
+        let e = Checkpoint::read(&path).unwrap_err();
+        assert!(e.contains("v4") && e.contains("v5"), "{e}");
     }
 }

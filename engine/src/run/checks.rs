@@ -118,10 +118,17 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     free_rollers: bool,
     factor: f64,
 ) -> Settling {
+    let pressure_deviation = if checks.pressure_target.is_nan() {
+        0.0
+    } else {
+        (checks.pressure - checks.pressure_target) / (num.stress * num.f_ref)
+    };
     if !free_rollers {
         return Settling {
             pairs: None,
             at_rest: checks.kinetic_ratio < factor && checks.stress_ratio < factor,
+            kinetic_at_rest: checks.kinetic_ratio < factor,
+            pressure_deviation,
             rollers: 0,
         };
     }
@@ -148,10 +155,12 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
             }
         })
         .sum();
+    let kinetic_at_rest = ke / sys.len() as f64 / (num.kinetic * num.f_ref) < factor;
     Settling {
         pairs: Some(pairs),
-        at_rest: ke / sys.len() as f64 / (num.kinetic * num.f_ref) < factor
-            && checks.stress_ratio < factor,
+        at_rest: kinetic_at_rest && checks.stress_ratio < factor,
+        kinetic_at_rest,
+        pressure_deviation,
         rollers: degree.iter().filter(|&&d| d == 1).count(),
     }
 }

@@ -22,7 +22,7 @@ pub use crate::contact::from_scene::{
 };
 pub use checks::measure;
 pub use numerics::StageNumerics;
-pub use options::{CheckpointSpec, DumpSpec, RunOptions};
+pub use options::{CheckpointSpec, DumpSpec, RunOptions, StageEndHook};
 pub use output::snapshot_of;
 pub use report::{Checks, Outcome, Progress, RunError, StepEnd, StepReport};
 pub use setup::{

@@ -1,7 +1,7 @@
 //! Options of a run: progress callback, stop flag, checkpoints.
 
 use super::checkpoint::Checkpoint;
-use super::report::Progress;
+use super::report::{Progress, StepReport};
 use crate::snapshot::Snapshot;
 use std::sync::atomic::AtomicBool;
 
@@ -25,6 +25,9 @@ pub struct DumpSpec<'a> {
     pub last: Option<u64>,
 }
 
+/// Receives a stage's report and the state it ended in.
+pub type StageEndHook<'a> = dyn FnMut(&StepReport, &Snapshot) + Send + 'a;
+
 /// Options of a run.
 #[derive(Default)]
 pub struct RunOptions<'a> {
@@ -38,4 +41,8 @@ pub struct RunOptions<'a> {
     pub resume: Option<Checkpoint>,
     /// Snapshots every so much simulated time.
     pub dump: Option<DumpSpec<'a>>,
+    /// Called when a DEM stage ends (not when it is interrupted) with its report and the
+    /// state it ended in: the points of a pressure program (GRC08 §II.D.2, `run
+    /// --stage-snapshots`).
+    pub stage_end: Option<&'a mut StageEndHook<'a>>,
 }

@@ -63,6 +63,10 @@ pub struct StageWatch<D: Dim> {
     held_since: Option<f64>,
     /// Largest strain rate max_α |L̇_α/L_α| seen at a check.
     pub peak_strain_rate: f64,
+    /// (time, signed pressure deviation in criterion units) of the checks within the last
+    /// `settle_time`, for `relax.mean_stress`.
+    #[serde(default)]
+    deviations: std::collections::VecDeque<(f64, f64)>,
 }
 
 impl<D: Dim> StageWatch<D> {
@@ -74,6 +78,7 @@ impl<D: Dim> StageWatch<D> {
             switch: None,
             held_since: None,
             peak_strain_rate: 0.0,
+            deviations: Default::default(),
         }
     }
 
@@ -134,8 +139,25 @@ impl<D: Dim> StageWatch<D> {
         let Settling {
             pairs: settle_pairs,
             at_rest,
+            kinetic_at_rest,
+            pressure_deviation,
             rollers,
         } = settled;
+        let at_rest = if relax.mean_stress {
+            self.deviations.push_back((time, pressure_deviation));
+            while self
+                .deviations
+                .front()
+                .is_some_and(|&(t, _)| t < time - relax.settle_time)
+            {
+                self.deviations.pop_front();
+            }
+            let mean =
+                self.deviations.iter().map(|d| d.1).sum::<f64>() / self.deviations.len() as f64;
+            kinetic_at_rest && mean.abs() < relax.settle_factor
+        } else {
+            at_rest
+        };
         let hash = match settle_pairs {
             Some(mut p) => {
                 p.sort_unstable();
@@ -222,6 +244,11 @@ pub struct Settling {
     /// Whether the kinetic criterion (free rollers' energy left out when asked) and, under
     /// stress control, the stress criterion hold.
     pub at_rest: bool,
+    /// Whether the kinetic criterion alone holds.
+    pub kinetic_at_rest: bool,
+    /// Signed deviation of the pressure from its target, in units of the stress criterion
+    /// (0 in a fixed cell).
+    pub pressure_deviation: f64,
     /// Free rollers left out (0 without `relax.free_rollers`).
     pub rollers: usize,
 }
@@ -266,6 +293,8 @@ mod tests {
         Settling {
             pairs: None,
             at_rest,
+            kinetic_at_rest: at_rest,
+            pressure_deviation: 0.0,
             rollers: 0,
         }
     }
@@ -277,6 +306,7 @@ mod tests {
             settle_time: 2.0,
             free_rollers: false,
             settle_factor: 1.0,
+            mean_stress: false,
         }
     }
 
@@ -299,6 +329,39 @@ mod tests {
         assert!(st.damping_on());
     }
 
+    /// A cell ringing about its target (±300 criteria, never within one at a check) with the
+    /// list and the kinetic energy settled: the instantaneous test never switches, the mean
+    /// over `settle_time` does, once the mean is within the criterion; a ringing off target
+    /// does not.
+    #[test]
+    fn mean_stress_switches_on_a_cell_ringing_about_its_target() {
+        let s = vec![Vector2::new(0.1, 0.2), Vector2::new(0.5, 0.5)];
+        let ringing = |k: usize, offset: f64| Settling {
+            pairs: None,
+            at_rest: false,
+            kinetic_at_rest: true,
+            pressure_deviation: offset + if k.is_multiple_of(2) { 300.0 } else { -300.0 },
+            rollers: 0,
+        };
+        let run = |mean_stress: bool, offset: f64| {
+            let mut st = StageWatch::<D2>::new(
+                Some(Relax {
+                    mean_stress,
+                    ..relax()
+                }),
+                0.0,
+            );
+            (0..100).find(|&k| {
+                st.observe_structure(0.1 * k as f64, ringing(k, offset), &mut [(0, 1)], 0.5, &s)
+            })
+        };
+        assert_eq!(run(false, 0.0), None);
+        // settle_time = 2: the list has been unchanged since t = 0 at check 20; the mean over
+        // the 21 checks of [0, 2] is 300/21 off, over an even count it is 0.
+        assert_eq!(run(true, 0.0), Some(21));
+        assert_eq!(run(true, 5.0), None);
+    }
+
     #[test]
     fn free_rollers_are_left_out_of_the_clock_but_not_out_of_the_report() {
         let s = vec![Vector2::new(0.1, 0.2), Vector2::new(0.5, 0.5)];
@@ -315,6 +378,8 @@ mod tests {
         let view = || Settling {
             pairs: Some(vec![(0, 1), (1, 2)]),
             at_rest: true,
+            kinetic_at_rest: true,
+            pressure_deviation: 0.0,
             rollers: 1,
         };
         assert!(!st.observe_structure(0.0, view(), &mut [(0, 1), (1, 2), (2, 3)], 0.5, &s));

@@ -542,6 +542,18 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         if end == StepEnd::Interrupted {
             return Ok(true);
         }
+        if let Some(hook) = opts.stage_end.as_mut() {
+            let report = ctx.reports.last().expect("pushed above");
+            let status = if end.ok() {
+                "equilibrium"
+            } else {
+                end.as_str()
+            };
+            hook(
+                report,
+                &snapshot_of(sys, &scene.name, &num, status, ctx.pressure),
+            );
+        }
     }
     Ok(false)
 }

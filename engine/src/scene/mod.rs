@@ -518,6 +518,14 @@ pub struct Relax {
     /// still ends on the criteria themselves.
     #[serde(default = "one")]
     pub settle_factor: f64,
+    /// The switch tests the stress criterion on the pressure averaged over the last
+    /// `settle_time` instead of at the check: under GRC08's pressure steps the cell of a loose
+    /// packing rings about its target (only the grains' normal dashpots damp its breathing)
+    /// with a stress error 10²–10³ times the criterion while the interaction list and the
+    /// kinetic energy have settled; on the mean the switch comes once the ringing is centred
+    /// on the target. The stage still ends on the criteria themselves.
+    #[serde(default)]
+    pub mean_stress: bool,
 }
 
 /// Equilibrium criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), in units of a force scale

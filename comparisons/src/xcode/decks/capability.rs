@@ -100,6 +100,9 @@ pub enum Feature {
     EquilibriumCriteria,
     /// Background damping once the interaction list has settled (`relax`, issue 12).
     FinalRelaxation,
+    /// The relaxation's switch on the pressure averaged over `settle_time`
+    /// (`relax.mean_stress`, GRC08 pressure programs).
+    RelaxMeanStress,
     /// Hard-grain stages before the first DEM stage (melting, growth, expansion).
     HardGrainPrelude,
     /// Hard-grain stages between DEM stages (AR07 §IV.B state C: expand, mix, compress again).
@@ -109,7 +112,7 @@ pub enum Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 29] = [
+    pub const ALL: [Feature; 30] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -136,6 +139,7 @@ impl Feature {
         Feature::MultiStage,
         Feature::EquilibriumCriteria,
         Feature::FinalRelaxation,
+        Feature::RelaxMeanStress,
         Feature::HardGrainPrelude,
         Feature::HardGrainInterlude,
         Feature::ContactDump,
@@ -169,6 +173,7 @@ impl Feature {
             Feature::MultiStage => "multi-stage",
             Feature::EquilibriumCriteria => "equilibrium-criteria",
             Feature::FinalRelaxation => "final-relaxation",
+            Feature::RelaxMeanStress => "relax-mean-stress",
             Feature::HardGrainPrelude => "hard-grain-prelude",
             Feature::HardGrainInterlude => "hard-grain-interlude",
             Feature::ContactDump => "contact-dump",
@@ -210,6 +215,9 @@ impl Feature {
             Feature::EquilibriumCriteria => "force, moment, stress and kinetic-energy criteria",
             Feature::FinalRelaxation => {
                 "background damping once the interaction list has settled (`relax`)"
+            }
+            Feature::RelaxMeanStress => {
+                "the relaxation's switch tests the pressure averaged over settle_time (`relax.mean_stress`)"
             }
             Feature::HardGrainPrelude => "hard-grain stages before the first DEM stage",
             Feature::HardGrainInterlude => "hard-grain stages between DEM stages (AR07 state C)",
@@ -311,6 +319,14 @@ pub fn features(start: &Start) -> Vec<Feature> {
     {
         f.push(Feature::FinalRelaxation);
     }
+    if start
+        .scene
+        .stages()
+        .iter()
+        .any(|(_, s)| s.relax().is_some_and(|r| r.mean_stress))
+    {
+        f.push(Feature::RelaxMeanStress);
+    }
     if !start.prelude.is_empty() {
         f.push(Feature::HardGrainPrelude);
     }
@@ -361,6 +377,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::StressControl => Approximate("fix press/berendsen aniso on the virial stress: each axis' strain rate is (P − σ_αα)/(3Bτ), at the cap only while σ_αα ≈ 0, no cell mass"),
             F::AffineVelocity => Approximate(REMAP),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
+            F::RelaxMeanStress => Unsupported("the switch is tested on the stress at the end of each settle_time chunk, not on its mean over the chunk; not generated"),
             F::FinalRelaxation => Approximate("switch tested at the end of each settle_time chunk on the contact count (compute contact/atom: touching pairs, not the interaction list) with the kinetic and stress criteria; damping by fix langevin at T = 0 (drag −γ m v exact, spins at LAMMPS's rotational rate); tangential dashpot inside the Coulomb cap; window checked by fix halt runs"),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the barostat; contact history carries over"),
@@ -386,7 +403,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::StressServo => Approximate("per-axis servo of fix deform with its own gain (full cap beyond 50 % of the target), not the scene's g"),
             F::AffineVelocity => Approximate(REMAP),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
-            F::FinalRelaxation => Unsupported(RELAX),
+            F::FinalRelaxation | F::RelaxMeanStress => Unsupported(RELAX),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the servo; contact history carries over"),
             F::EquilibriumCriteria => Approximate("criteria as ours (kinetic energy: translation of all grains, rotation of grains with a contact), checked between runs of check_every steps"),
@@ -411,7 +428,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::StressServo => Approximate("the script servo integrates AR07 (7) with a cell mass, not the scene's first-order servo"),
             F::RemapPositionsOnly => Approximate("bodies carry the cell's velocity field (homoDeform): contact velocities include ε̇·r"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
-            F::FinalRelaxation => Unsupported(RELAX),
+            F::FinalRelaxation | F::RelaxMeanStress => Unsupported(RELAX),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("κ and μ changes rescale kno, kso and tan φ of existing contacts (not checked by a test)"),
             _ => Exact,

@@ -1,0 +1,262 @@
+//! GRC08 §III: the consolidation curve of a run with pressure programs — Φ and z at the end
+//! of each pressure level, loading and unloading — its fit by GRC08 (9) (T.III), the CSV and
+//! the plot of Φ(P*) against the paper's fit.
+
+use crate::run::{stage_file, STAGES};
+use anyhow::{Context, Result};
+use grainbench_comparisons::metrics::analyze;
+use grainbench_comparisons::metrics::consolidation::{self, ConsolidationFit, ConsolidationLaw};
+use grainbench_comparisons::report::{paper, plots};
+use grainbench_engine::scene::Step;
+use grainbench_engine::{snapshot, Scene, Snapshot};
+use std::path::{Path, PathBuf};
+
+/// One pressure level of a program, as its stage ended.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Level {
+    /// Stage index (`Scene::stages`).
+    pub stage: usize,
+    pub loading: bool,
+    /// Reduced pressure P* of the level.
+    pub pressure: f64,
+    pub phi: f64,
+    /// Coordination number of the stage-end state (`None` without its snapshot).
+    pub z: Option<f64>,
+    /// How the stage ended (`equilibrium`, `time-limit`, …).
+    pub end: String,
+}
+
+/// Whether a scene runs pressure programs (GRC08 §II.D.2 cycles).
+pub fn has_program(scene: &Scene) -> bool {
+    scene
+        .protocol
+        .iter()
+        .any(|s| matches!(s, Step::PressureProgram { .. }))
+}
+
+/// The levels of the scene's pressure programs, from the run's stage reports (`steps`, as in
+/// summary.json) and the stage-end snapshots in `dir/stages/` where present.
+pub fn levels(scene: &Scene, steps: &serde_json::Value, dir: &Path) -> Result<Vec<Level>> {
+    let reports = steps.as_array().map(Vec::as_slice).unwrap_or_default();
+    let mut out = Vec::new();
+    for (stage, (k, step)) in scene.stages().into_iter().enumerate() {
+        let Step::PressureProgram { from, to, .. } = &scene.protocol[k] else {
+            continue;
+        };
+        let Step::Compress { pressure, .. } = step else {
+            continue;
+        };
+        let Some(r) = reports
+            .iter()
+            .find(|r| r["index"].as_u64() == Some(stage as u64))
+        else {
+            continue;
+        };
+        let path = dir.join(STAGES).join(stage_file(stage));
+        let z = if path.exists() {
+            let snap = Snapshot::read(&path)?;
+            analyze(&snap, &Default::default())
+                .metric_values()
+                .into_iter()
+                .find(|(key, _)| key == "z")
+                .map(|(_, v)| v)
+        } else {
+            None
+        };
+        out.push(Level {
+            stage,
+            loading: to > from,
+            pressure,
+            phi: r["checks"]["packing_fraction"]
+                .as_f64()
+                .with_context(|| format!("stage {stage} report without a packing fraction"))?,
+            z,
+            end: r["end"].as_str().unwrap_or("?").to_string(),
+        });
+    }
+    Ok(out)
+}
+
+/// GRC08 (9) fitted to the loading levels (the first program that raises the pressure; a
+/// level repeated at the start of the program counts once).
+pub fn fit_loading(levels: &[Level]) -> Option<ConsolidationFit> {
+    consolidation::fit(&loading_points(levels))
+}
+
+fn loading_points(levels: &[Level]) -> Vec<(f64, f64)> {
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for l in levels.iter().filter(|l| l.loading) {
+        match pts.last_mut() {
+            Some(last) if l.pressure <= last.0 => {
+                if l.pressure == last.0 {
+                    *last = (l.pressure, l.phi);
+                } else {
+                    break;
+                }
+            }
+            _ => pts.push((l.pressure, l.phi)),
+        }
+    }
+    pts
+}
+
+/// The values a reproduction table compares (paper-values.toml keys): the fit's P0_star,
+/// phi0, lambda, alpha, P1_star, phi_max, and phi_at_pmax, Φ at the highest loading level.
+pub fn values(levels: &[Level]) -> Vec<(String, f64)> {
+    let mut v = fit_loading(levels).map(|f| f.values()).unwrap_or_default();
+    if let Some(top) = levels
+        .iter()
+        .filter(|l| l.loading)
+        .max_by(|a, b| a.pressure.total_cmp(&b.pressure))
+    {
+        v.push(("phi_at_pmax".into(), top.phi));
+    }
+    v
+}
+
+/// Writes `consolidation.csv` (seed, branch, P*, Φ, z, end of every level) into `out`.
+pub fn write_csv(out: &Path, seeds: &[(u64, Vec<Level>)]) -> Result<PathBuf> {
+    let mut text = String::from("seed,branch,stage,pressure,phi,z,end\n");
+    for (seed, levels) in seeds {
+        for l in levels {
+            text.push_str(&format!(
+                "{seed},{},{},{},{},{},{}\n",
+                if l.loading { "loading" } else { "unloading" },
+                l.stage,
+                l.pressure,
+                l.phi,
+                l.z.map(|z| z.to_string()).unwrap_or_default(),
+                l.end
+            ));
+        }
+    }
+    let path = out.join("consolidation.csv");
+    snapshot::write_atomic(&path, text.as_bytes())?;
+    Ok(path)
+}
+
+/// The published fit of `state` (GRC08 T.III), if paper-values.toml has its parameters.
+pub fn paper_law(state: &str) -> Option<ConsolidationLaw> {
+    let v = &paper::paper_values(state)?.values;
+    let get = |k: &str| v.get(k).map(|x| x.value);
+    Some(ConsolidationLaw {
+        p0: get("P0_star")?,
+        phi0: get("phi0")?,
+        lambda: get("lambda")?,
+        alpha: get("alpha")?,
+        p1: get("P1_star")?,
+    })
+}
+
+/// Φ(P*) of every seed (loading and unloading levels, markers), each seed's fit by GRC08 (9)
+/// and the paper's (lines): `consolidation.svg` and `.png` in `out`.
+pub fn plot(
+    out: &Path,
+    seeds: &[(u64, Vec<Level>)],
+    paper: Option<ConsolidationLaw>,
+) -> Result<Vec<PathBuf>> {
+    // (label, points, marks) of each curve.
+    type Curve = (String, Vec<(f64, f64)>, plots::Marks);
+    let mut owned: Vec<Curve> = Vec::new();
+    let (mut p_min, mut p_max) = (f64::INFINITY, 0.0f64);
+    for (seed, levels) in seeds {
+        for loading in [true, false] {
+            let pts: Vec<(f64, f64)> = levels
+                .iter()
+                .filter(|l| l.loading == loading)
+                .map(|l| (l.pressure, l.phi))
+                .collect();
+            for p in &pts {
+                p_min = p_min.min(p.0);
+                p_max = p_max.max(p.0);
+            }
+            if !pts.is_empty() {
+                let branch = if loading { "loading" } else { "unloading" };
+                owned.push((format!("seed {seed} {branch}"), pts, plots::Marks::Points));
+            }
+        }
+        if let Some(f) = fit_loading(levels) {
+            owned.push((
+                format!(
+                    "seed {seed}: GRC08 (9), λ = {:.3}, Φmax = {:.4}",
+                    f.law.lambda,
+                    f.law.phi_max()
+                ),
+                curve(&f.law, f.law.p0, p_max),
+                plots::Marks::Lines,
+            ));
+        }
+    }
+    if let Some(law) = paper {
+        if p_max > 0.0 {
+            owned.push((
+                format!(
+                    "GRC08 T.III, λ = {}, Φmax = {:.4}",
+                    law.lambda,
+                    law.phi_max()
+                ),
+                curve(&law, law.p0, p_max),
+                plots::Marks::Lines,
+            ));
+        }
+    }
+    if owned.is_empty() {
+        return Ok(Vec::new());
+    }
+    let series: Vec<plots::Series> = owned
+        .iter()
+        .map(|(l, p, m)| plots::Series::new(l, p).with_marks(*m))
+        .collect();
+    let mut spec = plots::LinePlot::new("Consolidation curve Φ(P*)", "P* = Pa/F0", "Φ", &series);
+    spec.x_axis = plots::Axis::Log;
+    spec.x_range = Some((p_min * 0.8, p_max * 1.25));
+    spec.legend_lower_right = true;
+    let files = plots::line_plot(&out.join("consolidation"), &spec)?;
+    Ok(vec![files.svg, files.png])
+}
+
+fn curve(law: &ConsolidationLaw, from: f64, to: f64) -> Vec<(f64, f64)> {
+    (0..=80)
+        .map(|q| from * (to / from).powf(q as f64 / 80.0))
+        .map(|p| (p, law.phi(p)))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn level(pressure: f64, phi: f64, loading: bool) -> Level {
+        Level {
+            stage: 0,
+            loading,
+            pressure,
+            phi,
+            z: None,
+            end: "equilibrium".into(),
+        }
+    }
+
+    #[test]
+    fn loading_points_count_a_repeated_level_once_and_skip_unloading() {
+        let l = vec![
+            level(0.01, 0.50, true),
+            level(0.01, 0.51, true),
+            level(0.02, 0.52, true),
+            level(0.02, 0.52, false),
+            level(0.01, 0.52, false),
+        ];
+        assert_eq!(loading_points(&l), vec![(0.01, 0.51), (0.02, 0.52)]);
+        let v = values(&l);
+        // Two points: no fit, but Φ at the top level.
+        assert_eq!(v, vec![("phi_at_pmax".to_string(), 0.52)]);
+    }
+
+    #[test]
+    fn paper_law_reads_t3() {
+        let law = paper_law("grc08-consolidation-rr").expect("T.III row");
+        assert_eq!(law.lambda, 0.194);
+        assert!((law.phi_max() - 0.7745).abs() < 2e-3);
+        assert!(paper_law("ar07-A").is_none());
+    }
+}
