@@ -343,22 +343,24 @@ mod tests {
             pressure_deviation: offset + if k.is_multiple_of(2) { 300.0 } else { -300.0 },
             rollers: 0,
         };
+        // Checks every 1/8; a settle time of 31/16 holds 16 checks, 8 of each sign.
         let run = |mean_stress: bool, offset: f64| {
             let mut st = StageWatch::<D2>::new(
                 Some(Relax {
                     mean_stress,
+                    settle_time: 1.9375,
                     ..relax()
                 }),
                 0.0,
             );
             (0..100).find(|&k| {
-                st.observe_structure(0.1 * k as f64, ringing(k, offset), &mut [(0, 1)], 0.5, &s)
+                st.observe_structure(0.125 * k as f64, ringing(k, offset), &mut [(0, 1)], 0.5, &s)
             })
         };
         assert_eq!(run(false, 0.0), None);
-        // settle_time = 2: the list has been unchanged since t = 0 at check 20; the mean over
-        // the 21 checks of [0, 2] is 300/21 off, over an even count it is 0.
-        assert_eq!(run(true, 0.0), Some(21));
+        // The list has been unchanged for the settle time from check 16 (t = 2) on, when the
+        // window holds checks 1–16: mean 0.
+        assert_eq!(run(true, 0.0), Some(16));
         assert_eq!(run(true, 5.0), None);
     }
 
