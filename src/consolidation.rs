@@ -102,8 +102,8 @@ fn loading_points(levels: &[Level]) -> Vec<(f64, f64)> {
 
 /// The values a reproduction table compares (paper-values.toml keys): the fit's P0_star,
 /// phi0, lambda, alpha, P1_star, phi_max, and phi_at_pmax, Φ at the highest loading level.
-pub fn values(levels: &[Level]) -> Vec<(String, f64)> {
-    let mut v = fit_loading(levels).map(|f| f.values()).unwrap_or_default();
+pub fn values(levels: &[Level], fit: Option<&ConsolidationFit>) -> Vec<(String, f64)> {
+    let mut v = fit.map(|f| f.values()).unwrap_or_default();
     if let Some(top) = levels
         .iter()
         .filter(|l| l.loading)
@@ -114,10 +114,24 @@ pub fn values(levels: &[Level]) -> Vec<(String, f64)> {
     v
 }
 
+/// One seed's levels and the fit of its loading branch.
+pub struct SeedCurve {
+    pub seed: u64,
+    pub levels: Vec<Level>,
+    pub fit: Option<ConsolidationFit>,
+}
+
+impl SeedCurve {
+    pub fn new(seed: u64, levels: Vec<Level>) -> Self {
+        let fit = fit_loading(&levels);
+        SeedCurve { seed, levels, fit }
+    }
+}
+
 /// Writes `consolidation.csv` (seed, branch, P*, Φ, z, end of every level) into `out`.
-pub fn write_csv(out: &Path, seeds: &[(u64, Vec<Level>)]) -> Result<PathBuf> {
+pub fn write_csv(out: &Path, seeds: &[SeedCurve]) -> Result<PathBuf> {
     let mut text = String::from("seed,branch,stage,pressure,phi,z,end\n");
-    for (seed, levels) in seeds {
+    for SeedCurve { seed, levels, .. } in seeds {
         for l in levels {
             text.push_str(&format!(
                 "{seed},{},{},{},{},{},{}\n",
@@ -152,14 +166,14 @@ pub fn paper_law(state: &str) -> Option<ConsolidationLaw> {
 /// and the paper's (lines): `consolidation.svg` and `.png` in `out`.
 pub fn plot(
     out: &Path,
-    seeds: &[(u64, Vec<Level>)],
+    seeds: &[SeedCurve],
     paper: Option<ConsolidationLaw>,
 ) -> Result<Vec<PathBuf>> {
     // (label, points, marks) of each curve.
     type Curve = (String, Vec<(f64, f64)>, plots::Marks);
     let mut owned: Vec<Curve> = Vec::new();
     let (mut p_min, mut p_max) = (f64::INFINITY, 0.0f64);
-    for (seed, levels) in seeds {
+    for SeedCurve { seed, levels, fit } in seeds {
         for loading in [true, false] {
             let pts: Vec<(f64, f64)> = levels
                 .iter()
@@ -175,7 +189,7 @@ pub fn plot(
                 owned.push((format!("seed {seed} {branch}"), pts, plots::Marks::Points));
             }
         }
-        if let Some(f) = fit_loading(levels) {
+        if let Some(f) = fit {
             owned.push((
                 format!(
                     "seed {seed}: GRC08 (9), λ = {:.3}, Φmax = {:.4}",
@@ -247,7 +261,7 @@ mod tests {
             level(0.01, 0.52, false),
         ];
         assert_eq!(loading_points(&l), vec![(0.01, 0.51), (0.02, 0.52)]);
-        let v = values(&l);
+        let v = values(&l, fit_loading(&l).as_ref());
         // Two points: no fit, but Φ at the top level.
         assert_eq!(v, vec![("phi_at_pmax".to_string(), 0.52)]);
     }

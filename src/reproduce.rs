@@ -153,8 +153,9 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             scene.seed = r.seed;
             let levels =
                 consolidation::levels(&scene, &r.steps, &out.join(format!("seed-{}", r.seed)))?;
-            v.extend(consolidation::values(&levels));
-            curves.push((r.seed, levels));
+            let curve = consolidation::SeedCurve::new(r.seed, levels);
+            v.extend(consolidation::values(&curve.levels, curve.fit.as_ref()));
+            curves.push(curve);
         }
     }
     let table = reproduction::build(&state_key, &values)

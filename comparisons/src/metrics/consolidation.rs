@@ -2,9 +2,9 @@
 //! isotropic pressure, 1/Φ(P*) by GRC08 (9), and its fit to the equilibrium states of a
 //! pressure program (P0*, Φ0, λ, α, P1*, Φ_max as in GRC08 T.III).
 
+use super::math::Fit4;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
-use nalgebra::storage::Owned;
-use nalgebra::{DVector, Dyn, Matrix4, Vector4, U4};
+use nalgebra::{DVector, Matrix4, Vector4};
 use serde::Serialize;
 
 /// GRC08 (9) with its parameters. Written with the exponent 1/α on the bracket only,
@@ -80,56 +80,15 @@ impl ConsolidationFit {
     }
 }
 
-/// Least squares of 1/Φ over (1/Φ0, λ, α, ln P1*), P0* held.
-struct Problem {
-    p: Vec<f64>,
-    inv_phi: Vec<f64>,
-    p0: f64,
-    x: Vector4<f64>,
-}
-
-impl Problem {
-    fn law(&self, x: &Vector4<f64>) -> ConsolidationLaw {
-        ConsolidationLaw {
-            p0: self.p0,
-            phi0: 1.0 / x[0],
-            lambda: x[1],
-            alpha: x[2],
-            p1: x[3].exp(),
-        }
-    }
-    fn residuals_at(&self, x: &Vector4<f64>) -> DVector<f64> {
-        let law = self.law(x);
-        DVector::from_iterator(
-            self.p.len(),
-            self.p
-                .iter()
-                .zip(&self.inv_phi)
-                .map(|(&p, &y)| law.inverse_phi(p) - y),
-        )
-    }
-}
-
-impl LeastSquaresProblem<f64, Dyn, U4> for Problem {
-    type ResidualStorage = Owned<f64, Dyn>;
-    type JacobianStorage = Owned<f64, Dyn, U4>;
-    type ParameterStorage = Owned<f64, U4>;
-
-    fn set_params(&mut self, x: &Vector4<f64>) {
-        self.x = *x;
-    }
-
-    fn params(&self) -> Vector4<f64> {
-        self.x
-    }
-
-    fn residuals(&self) -> Option<DVector<f64>> {
-        let r = self.residuals_at(&self.x);
-        r.iter().all(|v| v.is_finite()).then_some(r)
-    }
-
-    fn jacobian(&self) -> Option<nalgebra::OMatrix<f64, Dyn, U4>> {
-        super::math::central_jacobian4(&self.x, self.p.len(), |x| self.residuals_at(x))
+/// The law of the fit's parameters (1/Φ0, λ, α, ln P1*), P0* held: 1/Φ0 and ln P1* keep Φ0
+/// and P1* positive.
+fn law_of(p0: f64, x: &Vector4<f64>) -> ConsolidationLaw {
+    ConsolidationLaw {
+        p0,
+        phi0: 1.0 / x[0],
+        lambda: x[1],
+        alpha: x[2],
+        p1: x[3].exp(),
     }
 }
 
@@ -157,25 +116,28 @@ pub fn fit_from(points: &[(f64, f64)], anchor: usize) -> Option<ConsolidationFit
         1.0,
         (p[p.len() - 1] / 4.0).ln(),
     );
-    let problem = Problem {
-        p,
-        inv_phi,
-        p0,
-        x: start,
-    };
+    let problem = Fit4::new(start, |x: &Vector4<f64>| {
+        let law = law_of(p0, x);
+        DVector::from_iterator(
+            p.len(),
+            p.iter()
+                .zip(&inv_phi)
+                .map(|(&p, &y)| law.inverse_phi(p) - y),
+        )
+    });
     let (problem, report) = LevenbergMarquardt::new()
         .with_patience(400)
         .minimize(problem);
     if !report.termination.was_successful() {
         return None;
     }
-    let law = problem.law(&problem.x);
+    let law = law_of(p0, &problem.x);
     if !(law.phi0 > 0.0 && law.lambda > 0.0 && law.alpha > 0.0 && law.p1.is_finite()) {
         return None;
     }
     let r = problem.residuals()?;
     let j = problem.jacobian()?;
-    let n = problem.p.len();
+    let n = p.len();
     let s2 = r.norm_squared() / (n - 4).max(1) as f64;
     let jtj: Matrix4<f64> = j.transpose() * &j;
     let cov = jtj.try_inverse().map(|m| m * s2);

@@ -2,9 +2,9 @@
 //! Levenberg–Marquardt fit to a measured I(k) (GRC07 §V.D): fractal dimension d_F and blob
 //! size ξ.
 
+use super::math::Fit4;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
-use nalgebra::storage::Owned;
-use nalgebra::{DMatrix, DVector, Dyn, Vector4, U4};
+use nalgebra::{DMatrix, DVector, Vector4};
 use serde::Serialize;
 
 /// GRC07 (28) without its constant: the 2D Fourier transform of C(r) − Φ² = Φ (r/ℓ)^{d_F−2}
@@ -101,51 +101,12 @@ pub struct FractalFit {
 
 /// Least squares of ln I: parameters (√constant, ln amplitude, d_F, ln ξ), so that the
 /// constant and the amplitude stay positive and every decade of I weighs alike.
-struct Problem {
-    k: Vec<f64>,
-    ln_i: Vec<f64>,
-    p: Vector4<f64>,
-}
-
 fn model_of(p: &Vector4<f64>) -> FractalModel {
     FractalModel {
         constant: p[0] * p[0],
         amplitude: p[1].exp(),
         d_f: p[2],
         xi: p[3].exp(),
-    }
-}
-
-impl Problem {
-    fn residuals_at(&self, p: &Vector4<f64>) -> DVector<f64> {
-        let m = model_of(p);
-        DVector::from_iterator(
-            self.k.len(),
-            (0..self.k.len()).map(|q| m.eval(self.k[q]).ln() - self.ln_i[q]),
-        )
-    }
-}
-
-impl LeastSquaresProblem<f64, Dyn, U4> for Problem {
-    type ResidualStorage = Owned<f64, Dyn>;
-    type JacobianStorage = Owned<f64, Dyn, U4>;
-    type ParameterStorage = Owned<f64, U4>;
-
-    fn set_params(&mut self, p: &Vector4<f64>) {
-        self.p = *p;
-    }
-
-    fn params(&self) -> Vector4<f64> {
-        self.p
-    }
-
-    fn residuals(&self) -> Option<DVector<f64>> {
-        let r = self.residuals_at(&self.p);
-        r.iter().all(|x| x.is_finite()).then_some(r)
-    }
-
-    fn jacobian(&self) -> Option<nalgebra::OMatrix<f64, Dyn, U4>> {
-        super::math::central_jacobian4(&self.p, self.k.len(), |x| self.residuals_at(x))
     }
 }
 
@@ -166,24 +127,26 @@ pub fn fit(k: &[f64], intensity: &[f64], k_min: f64, k_max: f64) -> Option<Fract
     let i_min = is.iter().copied().fold(f64::INFINITY, f64::min);
     let xi0 = 0.25 * 2.0 * std::f64::consts::PI / ks[0];
     let start = Vector4::new((0.1 * i_min).sqrt(), (2.0 * is[0]).ln(), 1.8, xi0.ln());
-    let problem = Problem {
-        k: ks,
-        ln_i: is.iter().map(|i| i.ln()).collect(),
-        p: start,
-    };
+    let ln_i: Vec<f64> = is.iter().map(|i| i.ln()).collect();
+    let problem = Fit4::new(start, |p: &Vector4<f64>| {
+        let m = model_of(p);
+        DVector::from_iterator(
+            ks.len(),
+            (0..ks.len()).map(|q| m.eval(ks[q]).ln() - ln_i[q]),
+        )
+    });
     let (problem, report) = LevenbergMarquardt::new()
         .with_patience(400)
         .minimize(problem);
     if !report.termination.was_successful() {
         return None;
     }
-    let model = model_of(&problem.p);
+    let model = model_of(&problem.x);
     if !(model.d_f > 0.0 && model.d_f < 3.0 && model.xi.is_finite()) {
         return None;
     }
     let r = problem.residuals()?;
     let j = problem.jacobian()?;
-    let ks = &problem.k;
     let dof = (ks.len() - 4).max(1) as f64;
     let s2 = r.norm_squared() / dof;
     // Covariance s²(JᵀJ)⁻¹; when the constant has gone to 0 its column vanishes and the
