@@ -9,7 +9,7 @@ use crate::xcode;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::outcome::Outcome;
 use grainbench_comparisons::xcode::crosscode::CodeResult;
-use grainbench_comparisons::xcode::decks::{self, Code, Start};
+use grainbench_comparisons::xcode::decks::{self, generic, Code, Start};
 use grainbench_comparisons::xcode::import::{self, Meta};
 use grainbench_engine::snapshot::Snapshot;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -76,7 +76,12 @@ pub fn write_fresh_deck(deck: &decks::Deck, dir: &Path) -> Result<()> {
     if dir.exists() {
         std::fs::remove_dir_all(dir).with_context(|| format!("clearing {}", dir.display()))?;
     }
-    xcode::write_deck(deck, dir)
+    xcode::write_deck(deck, dir)?;
+    if let Code::Adapter(_) = deck.code {
+        // `{output}` of the exchange format.
+        std::fs::create_dir_all(dir.join(generic::OUTPUT_DIR))?;
+    }
+    Ok(())
 }
 
 /// The command running `deck`: LAMMPS and LIGGGHTS under `mpirun -np K` when `np` is given,
@@ -88,6 +93,18 @@ pub fn command(
     np: Option<usize>,
     yade_threads: Option<usize>,
 ) -> Result<Command> {
+    if let Code::Adapter(a) = code {
+        // `{exchange}`: the run directory; `{output}`: its `final/` (docs/exchange-format.md).
+        let args = a.fill(
+            &a.run,
+            Path::new("."),
+            &Path::new(".").join(generic::OUTPUT_DIR),
+            np.or(yade_threads).unwrap_or(1),
+        );
+        let mut c = Command::new(binary);
+        c.args(&args[1..]);
+        return Ok(c);
+    }
     let mut cmd = match (np, code) {
         (Some(k), Code::Lammps | Code::Lammps2025 | Code::Liggghts) => {
             // LAMMPS 2025 links the MPICH of its virtual environment: its own mpirun.
@@ -385,17 +402,39 @@ pub fn last_line(path: &Path) -> String {
 
 /// The code's own version line from its output.
 pub fn version_line(code: Code, stdout: &Path) -> Option<String> {
+    if let Code::Adapter(a) = code {
+        let dir = stdout.parent()?.join(generic::OUTPUT_DIR);
+        return import::generic::status_value(&dir, "version")
+            .or_else(|| adapter_version(a))
+            .or_else(|| Some(a.run[0].clone()));
+    }
     let text = std::fs::read_to_string(stdout).ok()?;
     let key = match code {
         Code::Lammps | Code::Lammps2025 => "LAMMPS (",
         Code::Liggghts => "LIGGGHTS (",
         Code::Yade => "Yade ",
-        Code::Rust => return None,
+        Code::Rust | Code::Generic | Code::Adapter(_) => return None,
     };
     text.lines()
         .find(|l| l.contains(key))
         .map(clean_version)
         .or_else(|| Some(code.binary().to_string()))
+}
+
+/// The first line an adapter's `version` command prints.
+fn adapter_version(a: &grainbench_comparisons::xcode::adapter::Adapter) -> Option<String> {
+    let args = a.fill(a.version.as_ref()?, Path::new("."), Path::new("."), 1);
+    let out = Command::new(&args[0])
+        .args(&args[1..])
+        .stdin(Stdio::null())
+        .output()
+        .ok()?;
+    let text =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    text.lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty())
+        .map(String::from)
 }
 
 /// `Welcome to Yade 2023.02a` → `Yade 2023.02a`.
@@ -442,7 +481,12 @@ pub fn loop_time(code: Code, dir: &Path) -> Option<f64> {
             .and_then(|t| t.trim().trim_end_matches('s').trim().parse().ok())
             // Printed to 0.1 s: shorter loops are unknown.
             .filter(|&t: &f64| t >= 0.1),
-        Code::Rust => None,
+        Code::Adapter(_) => {
+            import::generic::status_value(&dir.join(generic::OUTPUT_DIR), "loop_time")?
+                .parse()
+                .ok()
+        }
+        Code::Rust | Code::Generic => None,
     }
 }
 

@@ -17,6 +17,7 @@ mod bench;
 mod common;
 mod compare;
 mod consolidation;
+mod exchange;
 mod external;
 mod reproduce;
 mod run;
@@ -109,6 +110,20 @@ enum Command {
     },
     /// List the embedded scenes.
     Scenes,
+    /// The reference implementation of the exchange format (docs/exchange-format.md): run
+    /// `INPUT/exchange.json` with `INPUT/particles.csv` in our engine and write
+    /// `OUTPUT/particles.csv`, `contacts.csv` and `status.txt`, as any code in the harness must.
+    RunExchange {
+        /// Directory holding exchange.json and particles.csv (`grainbench decks SCENE --codes generic`).
+        input: PathBuf,
+        /// Where the final state goes.
+        output: PathBuf,
+        /// Threads.
+        #[arg(long, short = 'j')]
+        threads: Option<usize>,
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Write LAMMPS, LIGGGHTS and YADE decks (input + data file of the same initial
     /// configuration) of a scene into `reference-inputs/<scene>/<code>/`.
     Decks {
@@ -117,7 +132,8 @@ enum Command {
         /// Every embedded scene.
         #[arg(long)]
         all: bool,
-        /// Codes, comma-separated: lammps (Debian's 2021), lammps-2025, liggghts, yade (default: all).
+        /// Codes, comma-separated: lammps (Debian's 2021), lammps-2025, liggghts, yade (default:
+        /// these four); `generic`: the neutral exchange format (docs/exchange-format.md).
         #[arg(long, value_delimiter = ',')]
         codes: Vec<String>,
         /// Output directory instead of `reference-inputs/<scene>/` (one scene only).
@@ -131,7 +147,9 @@ enum Command {
     Compare {
         /// Scene file or embedded scene name.
         scene: String,
-        /// Codes, comma-separated: rust, lammps (Debian's 2021), lammps-2025, liggghts, yade (default: all).
+        /// Codes, comma-separated: rust, lammps (Debian's 2021), lammps-2025, liggghts, yade
+        /// (default: all), and NAME=PATH.toml for any code with an adapter file
+        /// (docs/exchange-format.md).
         #[arg(long, value_delimiter = ',')]
         codes: Vec<String>,
         /// Output directory (default: `runs/compare/<scene>`).
@@ -166,7 +184,13 @@ enum Command {
     },
     /// Print the capability matrix: how each external code expresses each scene feature
     /// (`exact`, `approximate` with the deviation, `unsupported`); with a scene, only its features.
-    Capabilities { scene: Option<String> },
+    Capabilities {
+        scene: Option<String>,
+        /// Columns, comma-separated (default: lammps, lammps-2025, liggghts, yade); NAME=PATH.toml
+        /// adds a code with an adapter file.
+        #[arg(long, value_delimiter = ',')]
+        codes: Vec<String>,
+    },
     /// Run a paper's state at paper size over several seeds and compare every metric with the
     /// published values (table in Markdown/CSV/JSON, P(f) and g(r) plots). Interrupted runs
     /// continue where they stopped when the same command is given again.
@@ -373,9 +397,20 @@ fn dispatch(cli: Cli) -> Result<i32> {
             codes,
             out,
         } => xcode::decks_command(&scenes, all, &codes, out),
-        Command::Capabilities { scene } => xcode::capabilities_command(scene.as_deref()),
+        Command::Capabilities { scene, codes } => {
+            xcode::capabilities_command(scene.as_deref(), &codes)
+        }
         Command::Bench(args) => bench::bench(&args),
         Command::Scenes => common::list_scenes(),
+        Command::RunExchange {
+            input,
+            output,
+            threads,
+            quiet,
+        } => {
+            set_threads(threads)?;
+            exchange::run_exchange(&input, &output, quiet)
+        }
     }
 }
 

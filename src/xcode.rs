@@ -2,6 +2,7 @@
 
 use crate::common::load_scene;
 use anyhow::{bail, Context, Result};
+use grainbench_comparisons::xcode::adapter::Adapter;
 use grainbench_comparisons::xcode::decks::{self, capability, Deck, Start};
 use grainbench_comparisons::xcode::Code;
 use grainbench_engine::snapshot::write_atomic;
@@ -10,11 +11,19 @@ use std::path::{Path, PathBuf};
 /// Written instead of a deck when a code cannot express the scene.
 pub const REFUSED: &str = "refused.txt";
 
-/// Parses `--codes a,b,c`.
+/// Parses `--codes a,b,c`; `NAME=PATH.toml` adds a code described by an adapter file
+/// (docs/exchange-format.md).
 pub fn parse_codes(list: &[String], allow_rust: bool) -> Result<Vec<Code>> {
     let mut out = Vec::new();
     for name in list {
-        match Code::parse(name) {
+        let code = match name.split_once('=') {
+            Some((n, path)) => Some(Code::Adapter(
+                Adapter::register(n, Path::new(path))
+                    .map_err(|e| anyhow::anyhow!("--codes: {e}"))?,
+            )),
+            None => Code::parse(name),
+        };
+        match code {
             Some(Code::Rust) if !allow_rust => {
                 bail!("--codes: `rust` has no deck (grainbench runs the scene itself)")
             }
@@ -24,7 +33,7 @@ pub fn parse_codes(list: &[String], allow_rust: bool) -> Result<Vec<Code>> {
                 }
             }
             None => bail!(
-                "--codes: unknown code `{name}`; expected a comma-separated list of {}",
+                "--codes: unknown code `{name}`; expected a comma-separated list of {}, generic (the exchange format, for `decks`), or NAME=PATH.toml for a code with an adapter file",
                 Code::ALL.map(Code::name).join(", ")
             ),
         }
@@ -125,18 +134,23 @@ pub fn decks_command(
 }
 
 /// `grainbench capabilities`.
-pub fn capabilities_command(scene: Option<&str>) -> Result<i32> {
+pub fn capabilities_command(scene: Option<&str>, codes: &[String]) -> Result<i32> {
+    let codes = if codes.is_empty() {
+        Code::EXTERNAL.to_vec()
+    } else {
+        parse_codes(codes, false)?
+    };
     match scene {
-        None => print!("{}", capability::markdown()),
+        None => print!("{}", capability::markdown_for(&codes)),
         Some(spec) => {
             let scene = load_scene(spec)?;
             let start =
                 Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
             println!("scene {} uses:", scene.name);
-            println!("{}", capability::header());
+            println!("{}", capability::header_for(&codes));
             for f in decks::features(&start) {
                 print!("| `{}` |", f.key());
-                for c in Code::EXTERNAL {
+                for &c in &codes {
                     print!(" {} |", capability::support(c, f).cell());
                 }
                 println!();

@@ -1,6 +1,7 @@
 //! Cross-code comparison: the same scene run by LAMMPS, LIGGGHTS and YADE (SPEC §2–§4).
 //!
 //! * [`code`]: the [`Code`] enum (one per DEM code) and executable lookup.
+//! * [`adapter`]: adapter files, for any code reading the neutral exchange format.
 //! * [`decks`]: input decks for each external code, with the capability matrix.
 //! * [`import`]: readers of each code's final dumps into our snapshot format, and the
 //!   `deck.json` metadata ([`import::Meta`]) the decks write beside themselves.
@@ -9,6 +10,7 @@
 //!
 //! Imports run one way: `code` ← `import` ← `decks`; `crosscode` takes only [`Code`].
 
+pub mod adapter;
 pub mod code;
 pub mod crosscode;
 pub mod decks;

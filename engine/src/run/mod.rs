@@ -12,6 +12,7 @@ pub mod checks;
 pub mod numerics;
 pub mod options;
 pub mod output;
+pub mod particles_file;
 pub mod relax;
 pub mod report;
 pub mod setup;

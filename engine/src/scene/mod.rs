@@ -229,6 +229,16 @@ pub struct Initial {
     /// --start` to time every code on the same dense packing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub snapshot: Option<PathBuf>,
+    /// Start instead from the grains listed in this CSV file (issue 19, explicit-particle
+    /// scenes): a header naming the columns `x`, `y`, (`z`,) `diameter`, optionally `vx`, `vy`,
+    /// (`vz`,) in any order, other columns ignored; one row per grain, positions in [0, L)
+    /// (wrapped if not), lengths in a. Needs `cell`; `particles.count` and `dimension` must
+    /// match it; a relative path is taken from the working directory.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub particles: Option<PathBuf>,
+    /// Side lengths of the periodic cell (a) of a `particles` start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cell: Option<Vec<f64>>,
 }
 
 /// Numerical settings; the defaults suit the papers' scenes.

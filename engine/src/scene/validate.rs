@@ -267,7 +267,46 @@ impl Scene {
             }
         }
         let phi = self.initial.packing_fraction;
+        let from_file = self.initial.snapshot.is_some() || self.initial.particles.is_some();
+        if self.initial.snapshot.is_some() && self.initial.particles.is_some() {
+            return Err(err(
+                "initial.particles",
+                "a scene starts from `snapshot` or from `particles`, not both".into(),
+            ));
+        }
+        match &self.initial.cell {
+            Some(cell) if self.initial.particles.is_none() => {
+                return Err(err(
+                    "initial.cell",
+                    format!("{cell:?} is only read with `initial.particles`; remove it, or list the grains in a CSV file named by `particles`"),
+                ))
+            }
+            Some(cell)
+                if cell.len() != self.dimension
+                    || cell.iter().any(|l| !(l.is_finite() && *l > 0.0)) =>
+            {
+                return Err(err(
+                    "initial.cell",
+                    format!(
+                        "must list {} positive side lengths (units of a), got {cell:?}",
+                        self.dimension
+                    ),
+                ))
+            }
+            None if self.initial.particles.is_some() => {
+                return Err(err(
+                    "initial.cell",
+                    format!(
+                        "a `particles` start needs the periodic cell's side lengths, e.g. cell = [{}]",
+                        vec!["20.0"; self.dimension].join(", ")
+                    ),
+                ))
+            }
+            _ => {}
+        }
         match self.initial.arrangement {
+            // The grains of a file: Φ_I is theirs.
+            _ if from_file => {}
             Arrangement::Random => {
                 let phi_max = max_random_packing_fraction(self.dimension);
                 if !(phi.is_finite() && phi >= MIN_INITIAL_PACKING_FRACTION && phi <= phi_max) {

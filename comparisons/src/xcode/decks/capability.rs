@@ -356,6 +356,16 @@ pub fn support(code: Code, f: Feature) -> Support {
     use Support::*;
     match code {
         Code::Rust => Exact,
+        // The format describes every feature; grainbench runs the prelude itself.
+        Code::Generic => match f {
+            F::HardGrainInterlude => Unsupported(INTERLUDE),
+            _ => Exact,
+        },
+        Code::Adapter(a) => match f {
+            F::HardGrainPrelude => Exact,
+            F::HardGrainInterlude => Unsupported(INTERLUDE),
+            _ => a.support(f),
+        },
         // Exact entries checked for each version by comparisons/tests/lammps_two_particle.rs
         // within 1e-3: Hertz normal force, damping (2021: Tsuji's negative root; 2025: Tsuji's
         // root above 1 at ζ = 0.98, equal and unequal masses), Mindlin K_T, rescale on unloading
@@ -438,7 +448,12 @@ pub fn support(code: Code, f: Feature) -> Support {
 
 /// The table's header: one column per external code.
 pub fn header() -> String {
-    let names: Vec<&str> = Code::EXTERNAL.iter().map(|c| c.name()).collect();
+    header_for(&Code::EXTERNAL)
+}
+
+/// The table's header for `codes`.
+pub fn header_for(codes: &[Code]) -> String {
+    let names: Vec<&str> = codes.iter().map(|c| c.name()).collect();
     format!(
         "| feature | {} |\n| --- |{}",
         names.join(" | "),
@@ -448,10 +463,15 @@ pub fn header() -> String {
 
 /// The matrix as a Markdown table.
 pub fn markdown() -> String {
-    let mut s = header() + "\n";
+    markdown_for(&Code::EXTERNAL)
+}
+
+/// The matrix of `codes` as a Markdown table.
+pub fn markdown_for(codes: &[Code]) -> String {
+    let mut s = header_for(codes) + "\n";
     for f in Feature::ALL {
         s.push_str(&format!("| `{}` {} |", f.key(), f.describe()));
-        for c in Code::EXTERNAL {
+        for &c in codes {
             s.push_str(&format!(" {} |", support(c, f).cell()));
         }
         s.push('\n');

@@ -11,6 +11,7 @@
 //! * [`deck`]: the deck of a scene for one code, refusing unsupported features with what is missing.
 
 pub mod capability;
+pub mod generic;
 pub mod lammps;
 pub mod lammps_table;
 pub mod liggghts;
@@ -340,6 +341,8 @@ pub fn deck(start: &Start, code: Code) -> Result<Deck, Refusal> {
         Code::Lammps | Code::Lammps2025 => lammps::deck(start, code, &deviations),
         Code::Liggghts => liggghts::deck(start, &deviations),
         Code::Yade => yade::deck(start, &deviations),
+        // An adapter's code reads the exchange format; `external` adds its command.
+        Code::Generic | Code::Adapter(_) => generic::deck(start),
         Code::Rust => unreachable!("grainbench runs scenes, not decks"),
     };
     deck.code = code;

@@ -6,10 +6,12 @@
 //!   `compute property/local` (written by our LAMMPS decks).
 //! * [`liggghts`]: `dump custom` of the atoms + `dump local` of `compute pair/gran/local`.
 //! * [`yade`]: the text export our YADE scripts write (bodies, interactions, cell).
+//! * [`generic`]: the exchange format's output (`particles.csv`, `contacts.csv`, `status.txt`).
 //!
 //! Each reader returns [`Raw`] grains and contacts; [`assemble`] builds the snapshot (branch
 //! vectors and gaps from the positions, contact stress from the forces, AR07 (8)).
 
+pub mod generic;
 pub mod lammps;
 pub mod liggghts;
 pub mod yade;
@@ -106,6 +108,11 @@ pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Snapshot, ImportError
         Code::Lammps | Code::Lammps2025 => lammps::read_dir(dir, meta)?,
         Code::Liggghts => liggghts::read_dir(dir, meta)?,
         Code::Yade => yade::read_dir(dir, meta)?,
+        // The code's output directory of the exchange format.
+        Code::Generic | Code::Adapter(_) => {
+            let out = dir.join(crate::xcode::decks::generic::OUTPUT_DIR);
+            generic::read_dir(if out.is_dir() { &out } else { dir }, meta)?
+        }
         Code::Rust => {
             return Snapshot::read(&dir.join("final.json")).map_err(|e| ImportError::new(dir, e))
         }

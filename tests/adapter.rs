@@ -1,0 +1,216 @@
+//! Any DEM code through the exchange format and an adapter file (issue 19,
+//! docs/exchange-format.md): the reference adapter end to end in `compare`, refusals from an
+//! adapter's `supports`, a failing code, the generic deck, and the capability column.
+
+use assert_cmd::Command;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn grainbench() -> Command {
+    let mut c = Command::cargo_bin("grainbench").unwrap();
+    // The reference adapter runs `grainbench` from PATH: this build's.
+    let bin = assert_cmd::cargo::cargo_bin("grainbench");
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let mut dirs = vec![bin.parent().unwrap().to_path_buf()];
+    dirs.extend(std::env::split_paths(&path));
+    c.env("PATH", std::env::join_paths(dirs).unwrap());
+    c
+}
+
+fn reference_adapter() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("reference-inputs/adapters/grainbench.toml")
+}
+
+fn compare_json(dir: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(dir.join("compare.json")).unwrap()).unwrap()
+}
+
+fn code<'a>(cmp: &'a Value, name: &str) -> &'a Value {
+    cmp["codes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["code"] == name)
+        .unwrap_or_else(|| panic!("no {name} in {cmp}"))
+}
+
+#[test]
+fn the_reference_adapter_runs_the_exchange_and_lands_in_the_bands() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cmp");
+    let codes = format!("rust,ref={}", reference_adapter().display());
+    let assert = grainbench()
+        .args(["compare", "xcode-smoke", "--quiet", "--codes", &codes, "-o"])
+        .arg(&out)
+        .assert();
+    let o = assert.get_output();
+    assert!(
+        o.status.success(),
+        "every band check passes: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let cmp = compare_json(&out);
+    let r = code(&cmp, "ref");
+    assert_eq!(r["outcome"], "ran", "{r}");
+    assert_eq!(r["status"], "equilibrium", "{r}");
+    assert!(
+        r["version"]
+            .as_str()
+            .unwrap()
+            .contains("exchange reference"),
+        "the version line comes from status.txt: {r}"
+    );
+    // The code read only exchange.json and particles.csv and wrote the three output files.
+    let run = out.join("ref");
+    for f in [
+        "exchange.json",
+        "particles.csv",
+        "final/particles.csv",
+        "final/contacts.csv",
+        "final/status.txt",
+    ] {
+        assert!(run.join(f).is_file(), "{f}");
+    }
+    let ours = code(&cmp, "rust")["metrics"]["phi"].as_f64().unwrap();
+    let theirs = r["metrics"]["phi"].as_f64().unwrap();
+    // Same start, same law and protocol, another trajectory (round-off): the seed spread of Φ
+    // at n = 256 is ~0.002.
+    assert!((ours - theirs).abs() < 0.005, "Φ {ours} vs {theirs}");
+    assert_eq!(r["metrics"]["pressure"].as_f64().unwrap().round(), 1.0);
+    let md = std::fs::read_to_string(out.join("compare.md")).unwrap();
+    assert!(md.contains("| ref |"), "{md}");
+}
+
+fn adapter_file(dir: &Path, text: &str) -> PathBuf {
+    let p = dir.join("adapter.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn an_adapter_without_a_feature_is_refused_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = adapter_file(
+        dir.path(),
+        "run = [\"true\", \"{output}\"]\nsupports = [\"hertz-normal\", \"coulomb\"]\n",
+    );
+    let out = dir.path().join("cmp");
+    grainbench()
+        .args(["compare", "xcode-smoke", "--quiet", "--codes"])
+        .arg(format!("narrow={}", a.display()))
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let cmp = compare_json(&out);
+    let r = code(&cmp, "narrow");
+    assert_eq!(r["outcome"], "refused", "{r}");
+    let m = r["message"].as_str().unwrap();
+    assert!(
+        m.contains("stress-control") && m.contains("supports"),
+        "{m}"
+    );
+    assert!(!m.contains("coulomb unsupported"), "{m}");
+    // The same in the capability matrix, beside a built-in code.
+    let o = grainbench()
+        .args(["capabilities", "xcode-smoke", "--codes"])
+        .arg(format!("lammps,narrow={}", a.display()))
+        .assert()
+        .success();
+    let text = String::from_utf8_lossy(&o.get_output().stdout).to_string();
+    assert!(text.contains("| feature | lammps | narrow |"), "{text}");
+    assert!(
+        text.contains("| `stress-control` |")
+            && text.contains("not in the adapter's `supports` list"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_failing_code_is_reported_with_its_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = adapter_file(
+        dir.path(),
+        "run = [\"sh\", \"-c\", \"echo cannot read the law >&2; exit 3\", \"{output}\"]\nsupports = [\"hertz-normal\", \"mindlin-tangential\", \"mindlin-unloading\", \"hertz-damping\", \"coulomb\", \"stress-control\", \"affine-velocity\", \"equilibrium-criteria\", \"contact-dump\"]\n",
+    );
+    let out = dir.path().join("cmp");
+    grainbench()
+        .args(["compare", "xcode-smoke", "--quiet", "--codes"])
+        .arg(format!("broken={}", a.display()))
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let r = code(&compare_json(&out), "broken").clone();
+    assert_eq!(r["outcome"], "failed", "{r}");
+    let m = r["message"].as_str().unwrap();
+    assert!(
+        m.contains("exit status: 3") && m.contains("cannot read the law"),
+        "{m}"
+    );
+}
+
+#[test]
+fn bad_adapter_names_and_files_are_errors_naming_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = adapter_file(dir.path(), "run = [\"x\"]\nsupports = []\n");
+    grainbench()
+        .args(["compare", "xcode-smoke", "--codes"])
+        .arg(format!("mine={}", a.display()))
+        .assert()
+        .failure()
+        .stderr(predicates::str::contains("field `run`"))
+        .stderr(predicates::str::contains("adapter.toml"));
+    grainbench()
+        .args(["compare", "xcode-smoke", "--codes"])
+        .arg(format!("yade={}", reference_adapter().display()))
+        .assert()
+        .failure()
+        .stderr(predicates::str::contains("built-in"));
+}
+
+#[test]
+fn the_generic_deck_holds_the_start_and_the_protocol() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("decks");
+    grainbench()
+        .args(["decks", "grc07-cohesive-small", "--codes", "generic", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+    let ex: Value =
+        serde_json::from_slice(&std::fs::read(out.join("generic/exchange.json")).unwrap()).unwrap();
+    assert_eq!(ex["format"], "grainbench-exchange");
+    assert_eq!(ex["version"], 1);
+    assert_eq!(ex["law"]["kind"], "linear");
+    assert!(ex["law"]["cohesion"]["d0"].as_f64().unwrap() > 0.0);
+    let n = ex["particles"]["count"].as_u64().unwrap() as usize;
+    let csv = std::fs::read_to_string(out.join("generic/particles.csv")).unwrap();
+    assert_eq!(csv.lines().count(), n + 1);
+    assert!(
+        csv.starts_with("id,x,y,diameter,mass,inertia,vx,vy\n"),
+        "{csv}"
+    );
+    let stages = ex["stages"].as_array().unwrap();
+    assert!(!stages.is_empty());
+    for s in stages {
+        assert!(
+            s["dt"].as_f64().unwrap() > 0.0 && s["tolerances"]["force"].as_f64().unwrap() > 0.0,
+            "{s}"
+        );
+    }
+    // A reader refuses another version, naming it.
+    let bad = dir.path().join("bad");
+    std::fs::create_dir_all(&bad).unwrap();
+    let text = std::fs::read_to_string(out.join("generic/exchange.json"))
+        .unwrap()
+        .replace("\"version\": 1", "\"version\": 7");
+    std::fs::write(bad.join("exchange.json"), text).unwrap();
+    grainbench()
+        .arg("run-exchange")
+        .arg(&bad)
+        .arg(dir.path().join("o"))
+        .assert()
+        .failure()
+        .stderr(predicates::str::contains("version 7"));
+}
