@@ -7,6 +7,109 @@ use grainbench_comparisons::xcode::{import, Code};
 use grainbench_engine::Snapshot;
 use std::path::Path;
 
+/// What a user's own dumps do not say (`analyze --from` without a `deck.json`), or overrides
+/// of it.
+#[derive(Default)]
+pub struct DumpMeta {
+    pub dimension: Option<usize>,
+    /// μ of the last stage: a number or `inf`.
+    pub mu: Option<String>,
+    /// Target pressure of the last stage, or `none` (fixed cell).
+    pub pressure: Option<String>,
+    pub force_unit: Option<String>,
+    /// Adhesive law: pairs dumped within the attraction range (LAMMPS rows without force are
+    /// dropped).
+    pub cohesive: bool,
+}
+
+impl DumpMeta {
+    fn given(&self) -> bool {
+        self.dimension.is_some()
+            || self.mu.is_some()
+            || self.pressure.is_some()
+            || self.force_unit.is_some()
+            || self.cohesive
+    }
+
+    /// `deck.json` of `dir` with these overrides, or these alone when there is none (all four
+    /// needed then, each missing one named).
+    fn meta(&self, dir: &Path, code: Code) -> Result<import::Meta> {
+        let file = dir.join(import::Meta::FILE);
+        let mut meta = if file.exists() {
+            import::Meta::read(dir)?
+        } else {
+            let missing: Vec<&str> = [
+                ("--dimension 2|3", self.dimension.is_none()),
+                ("--mu X|inf (μ of the last stage)", self.mu.is_none()),
+                (
+                    "--pressure P|none (target of the last stage; none: fixed cell)",
+                    self.pressure.is_none(),
+                ),
+                (
+                    "--force-unit TEXT (e.g. \"P_ref a^2\" or F0)",
+                    self.force_unit.is_none(),
+                ),
+            ]
+            .into_iter()
+            .filter_map(|(o, m)| m.then_some(o))
+            .collect();
+            if !missing.is_empty() {
+                bail!(
+                    "--from {code}: {} has no deck.json (our decks write one); for dumps of your own deck give {}",
+                    dir.display(),
+                    missing.join(", ")
+                );
+            }
+            import::Meta {
+                scene: dir
+                    .file_name()
+                    .map_or("imported".into(), |n| n.to_string_lossy().into_owned()),
+                code: code.name().into(),
+                dimension: 0,
+                pressure_target: None,
+                cohesive: false,
+                mu: None,
+                force_unit: String::new(),
+                n: 0,
+                data: Default::default(),
+            }
+        };
+        if let Some(d) = self.dimension {
+            if d != 2 && d != 3 {
+                bail!("--dimension {d}: 2 (disks) or 3 (spheres)");
+            }
+            meta.dimension = d;
+        }
+        if let Some(mu) = &self.mu {
+            meta.mu = match mu.as_str() {
+                "inf" | "infinity" => None,
+                x => Some(
+                    x.parse::<f64>()
+                        .ok()
+                        .filter(|m| m.is_finite() && *m >= 0.0)
+                        .ok_or_else(|| anyhow!("--mu {x}: a number ≥ 0, or inf"))?,
+                ),
+            };
+        }
+        if let Some(p) = &self.pressure {
+            meta.pressure_target = match p.as_str() {
+                "none" => None,
+                x => Some(
+                    x.parse::<f64>()
+                        .ok()
+                        .filter(|p| p.is_finite() && *p >= 0.0)
+                        .ok_or_else(|| anyhow!("--pressure {x}: a number ≥ 0, or none"))?,
+                ),
+            };
+        }
+        if let Some(u) = &self.force_unit {
+            meta.force_unit = u.clone();
+        }
+        meta.cohesive |= self.cohesive;
+        Ok(meta)
+    }
+}
+
 /// What `analyze` measures besides the defaults.
 pub struct Extra<'a> {
     /// Elastic moduli and rigidity (GRC08 §VI, GRC07 App. A).
@@ -22,25 +125,29 @@ pub fn analyze(
     path: &Path,
     json: bool,
     from: Option<&str>,
+    dump: &DumpMeta,
     write: Option<&Path>,
     extra: &Extra,
 ) -> Result<i32> {
+    if from.is_none() && dump.given() {
+        bail!("--dimension, --mu, --pressure, --force-unit and --cohesive describe another code's dumps: add --from lammps|liggghts|yade");
+    }
     let snap = match from {
         None => Snapshot::read(path)?,
         Some(name) => {
             let code = match Code::parse(name) {
-                Some(Code::Rust) | None => {
-                    bail!("--from: expected lammps, liggghts or yade, got `{name}`")
+                Some(Code::Rust | Code::Generic | Code::Adapter(_)) | None => {
+                    bail!("--from: expected lammps, lammps-2025, liggghts or yade, got `{name}`")
                 }
                 Some(c) => c,
             };
             if !path.is_dir() {
                 bail!(
-                    "--from {name}: {} is not a directory (give the directory holding the final dumps and deck.json)",
+                    "--from {name}: {} is not a directory (give the directory holding the final dumps)",
                     path.display()
                 );
             }
-            let meta = import::Meta::read(path)?;
+            let meta = dump.meta(path, code)?;
             import::read(code, path, &meta)?
         }
     };

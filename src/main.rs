@@ -85,11 +85,27 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// Read the final state of another code from a directory: `lammps` (dump custom +
-        /// dump local), `liggghts` (dump custom + pair/gran/local), `yade` (text export); the
-        /// directory needs a `deck.json` (written with the decks; format in
-        /// docs/external-formats/).
+        /// dump local), `liggghts` (dump custom + pair/gran/local), `yade` (text export); formats
+        /// in docs/external-formats/. Our decks write a `deck.json` beside them; for dumps of
+        /// your own deck give --dimension, --mu, --pressure and --force-unit.
         #[arg(long, value_name = "CODE")]
         from: Option<String>,
+        /// With --from: 2 or 3 (overrides deck.json).
+        #[arg(long)]
+        dimension: Option<usize>,
+        /// With --from: μ of the last stage, a number or `inf` (overrides deck.json).
+        #[arg(long, value_name = "MU")]
+        mu: Option<String>,
+        /// With --from: target pressure of the last stage, or `none` for a fixed cell (overrides
+        /// deck.json).
+        #[arg(long, value_name = "P")]
+        pressure: Option<String>,
+        /// With --from: the force unit of the dumps, e.g. "P_ref a^2" or F0 (overrides deck.json).
+        #[arg(long, value_name = "TEXT")]
+        force_unit: Option<String>,
+        /// With --from: an adhesive law (pairs within the attraction range are dumped).
+        #[arg(long)]
+        cohesive: bool,
         /// Also write the state read as a grainbench snapshot.
         #[arg(long, value_name = "FILE")]
         write: Option<PathBuf>,
@@ -344,6 +360,11 @@ fn dispatch(cli: Cli) -> Result<i32> {
             snapshot,
             json,
             from,
+            dimension,
+            mu,
+            pressure,
+            force_unit,
+            cohesive,
             write,
             moduli,
             scene,
@@ -352,6 +373,13 @@ fn dispatch(cli: Cli) -> Result<i32> {
             &snapshot,
             json,
             from.as_deref(),
+            &analyze::DumpMeta {
+                dimension,
+                mu,
+                pressure,
+                force_unit,
+                cohesive,
+            },
             write.as_deref(),
             &analyze::Extra {
                 moduli,

@@ -4,6 +4,7 @@
 //! run to record.
 
 use assert_cmd::Command;
+use predicates::prelude::*;
 use std::path::Path;
 
 /// A 32-sphere version of xcode-smoke (seconds to run).
@@ -126,6 +127,69 @@ fn unknown_code_is_a_clear_error() {
         .assert()
         .code(2)
         .stderr(predicates::str::contains("unknown code `gromacs`"));
+}
+
+/// Dumps of a user's own deck (no `deck.json`): the four parameters as options give the same
+/// metrics as the deck.json our generator writes; a missing one is named, with the option to
+/// give.
+#[test]
+fn own_dumps_analyze_with_options_instead_of_deck_json() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for code in ["lammps", "liggghts", "yade"] {
+        let src = root.join("tests/fixtures/xcode-smoke").join(code);
+        let tmp = tempfile::tempdir().unwrap();
+        for e in std::fs::read_dir(&src).unwrap() {
+            let e = e.unwrap();
+            if e.file_name() != "deck.json" {
+                std::fs::copy(e.path(), tmp.path().join(e.file_name())).unwrap();
+            }
+        }
+        let with_deck = Command::cargo_bin("grainbench")
+            .unwrap()
+            .args(["analyze", "--json", "--from", code])
+            .arg(&src)
+            .output()
+            .unwrap();
+        let own = Command::cargo_bin("grainbench")
+            .unwrap()
+            .args(["analyze", "--json", "--from", code])
+            .arg(tmp.path())
+            .args([
+                "--dimension",
+                "3",
+                "--mu",
+                "0.3",
+                "--pressure",
+                "1",
+                "--force-unit",
+                "P_ref a^2",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            own.status.success(),
+            "{code}: {}",
+            String::from_utf8_lossy(&own.stderr)
+        );
+        let (a, b): (serde_json::Value, serde_json::Value) = (
+            serde_json::from_slice(&with_deck.stdout).unwrap(),
+            serde_json::from_slice(&own.stdout).unwrap(),
+        );
+        for key in ["packing_fraction", "z", "z_backbone", "pressure"] {
+            assert_eq!(a[key], b[key], "{code}: {key}");
+        }
+        Command::cargo_bin("grainbench")
+            .unwrap()
+            .args(["analyze", "--from", code])
+            .arg(tmp.path())
+            .args(["--dimension", "3", "--mu", "0.3"])
+            .assert()
+            .failure()
+            .stderr(predicates::str::contains("no deck.json"))
+            .stderr(predicates::str::contains("--pressure"))
+            .stderr(predicates::str::contains("--force-unit"))
+            .stderr(predicates::str::contains("--mu").not());
+    }
 }
 
 /// `analyze --from CODE DIR` on the final dumps each code wrote for the recorded xcode-smoke
