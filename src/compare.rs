@@ -122,7 +122,7 @@ fn write_outputs(
     )?;
     let labels: Vec<String> = analyses.iter().map(|(c, _)| c.clone()).collect();
     let analyses: Vec<Analysis> = analyses.into_iter().map(|(_, a)| a).collect();
-    crate::reproduce::write_plots(out, &labels, &analyses);
+    crate::reproduce::write_plots(out, &labels, &analyses, false);
     eprintln!(
         "wrote {0}/compare.md, compare.csv, compare.json, pf.svg/png, gr.svg/png{1}",
         out.display(),

@@ -165,7 +165,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     snapshot::write_atomic(&out.join("report.csv"), table.to_csv().as_bytes())?;
     snapshot::write_atomic(&out.join("report.json"), table.to_json().as_bytes())?;
     let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
-    let mut plotted = write_plots(&out, &labels, &analyses);
+    let mut plotted = write_plots(&out, &labels, &analyses, true);
     if !curves.is_empty() {
         plotted.push(consolidation::write_csv(&out, &curves)?);
         match consolidation::plot(&out, &curves, consolidation::paper_law(&state_key)) {
@@ -242,7 +242,14 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
 /// P(f) and g(r) of every analysis (one curve per label: seeds, codes), overlaid; the DTS fit
 /// for cohesionless frictionless sphere packings (AR07 Fig. 4); I(k) with its GRC07 (28) fit
 /// for 2D cohesive packings. Returns the files written.
-pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) -> Vec<PathBuf> {
+/// With `seeds` (the analyses are seeds of one state), P(f) is their mean over the band of
+/// their spread.
+pub(crate) fn write_plots(
+    out: &Path,
+    labels: &[String],
+    analyses: &[Analysis],
+    seeds: bool,
+) -> Vec<PathBuf> {
     let mut written = Vec::new();
     let pf: Vec<Vec<(f64, f64)>> = analyses
         .iter()
@@ -264,12 +271,13 @@ pub(crate) fn write_plots(out: &Path, labels: &[String], analyses: &[Analysis]) 
             .map(|(p, l)| plots::Series::new(l, p))
             .collect()
     }
-    match plots::force_distribution(
-        &out.join("pf"),
-        &series(&pf, labels),
-        frictionless_spheres,
-        cohesive,
-    ) {
+    let banded = seeds.then(|| plots::seed_band(&pf)).flatten();
+    let band_label = format!("mean of {} seeds (band: their spread)", pf.len());
+    let pf_series = match &banded {
+        Some(b) => vec![plots::Series::new(&band_label, &b.mean).with_band(&b.band)],
+        None => series(&pf, labels),
+    };
+    match plots::force_distribution(&out.join("pf"), &pf_series, frictionless_spheres, cohesive) {
         Ok(f) => written.extend([f.svg, f.png]),
         Err(e) => eprintln!("warning: no P(f) plot: {e}"),
     }

@@ -81,6 +81,51 @@ pub fn dts_fit_curve(f_max: f64, n: usize) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// A point of a shaded band: x, low, high.
+pub type Band = (f64, f64, f64);
+
+/// The mean of several curves and their spread.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeedBand {
+    pub mean: Vec<(f64, f64)>,
+    pub band: Vec<Band>,
+}
+
+/// The mean of curves sampled on one grid (histograms of one bin width: P(f) of several
+/// seeds) and their spread, (x, min, max); a bin a curve lacks counts as 0 (no samples there).
+/// `None` when the grids differ (another bin width) or there are fewer than two curves.
+pub fn seed_band(curves: &[Vec<(f64, f64)>]) -> Option<SeedBand> {
+    let width = |c: &Vec<(f64, f64)>| (c.len() >= 2).then(|| c[1].0 - c[0].0);
+    let w = width(curves.first()?)?;
+    if curves.len() < 2
+        || curves
+            .iter()
+            .any(|c| width(c).is_none_or(|v| (v - w).abs() > 1e-9 * w.abs()))
+    {
+        return None;
+    }
+    let key = |x: f64| (x / w).round() as i64;
+    let mut grid: std::collections::BTreeMap<i64, Vec<f64>> = Default::default();
+    for (k, c) in curves.iter().enumerate() {
+        for &(x, y) in c {
+            grid.entry(key(x))
+                .or_insert_with(|| vec![0.0; curves.len()])[k] = y;
+        }
+    }
+    let n = curves.len() as f64;
+    let offset = curves[0][0].0 - key(curves[0][0].0) as f64 * w;
+    let mut mean = Vec::new();
+    let mut band = Vec::new();
+    for (k, ys) in grid {
+        let x = k as f64 * w + offset;
+        mean.push((x, ys.iter().sum::<f64>() / n));
+        let lo = ys.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = ys.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        band.push((x, lo, hi));
+    }
+    Some(SeedBand { mean, band })
+}
+
 /// One labelled curve: points (x, y) in drawing order.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Series<'a> {
@@ -90,6 +135,8 @@ pub struct Series<'a> {
     pub points: &'a [(f64, f64)],
     /// How this series is drawn, if not as the plot's [`LinePlot::marks`] say.
     pub marks: Option<Marks>,
+    /// A shaded band (x, low, high) behind the curve, e.g. the spread over seeds.
+    pub band: Option<&'a [(f64, f64, f64)]>,
 }
 
 impl<'a> Series<'a> {
@@ -99,6 +146,15 @@ impl<'a> Series<'a> {
             label,
             points,
             marks: None,
+            band: None,
+        }
+    }
+
+    /// The same series over a shaded band (x, low, high).
+    pub fn with_band(self, band: &'a [(f64, f64, f64)]) -> Self {
+        Series {
+            band: Some(band),
+            ..self
         }
     }
 
@@ -275,6 +331,7 @@ pub fn force_distribution(
             color: BLACK,
             marks: Marks::Lines,
             dashed: true,
+            band: None,
         });
     }
     let spec = Spec {
@@ -352,6 +409,7 @@ struct Curve<'a> {
     color: RGBColor,
     marks: Marks,
     dashed: bool,
+    band: Option<&'a [(f64, f64, f64)]>,
 }
 
 impl<'a> Curve<'a> {
@@ -362,6 +420,7 @@ impl<'a> Curve<'a> {
             color,
             marks,
             dashed: false,
+            band: s.band,
         }
     }
 }
@@ -392,13 +451,58 @@ impl Spec<'_> {
 
     /// The drawable points of a curve that fall in the plotted ranges.
     fn visible(&self, c: &Curve, xr: (f64, f64), yr: (f64, f64)) -> Vec<(f64, f64)> {
-        c.points
-            .iter()
-            .copied()
-            .filter(|p| self.drawable(p))
-            .map(|(x, y)| (x, y.clamp(yr.0, yr.1)))
-            .filter(|(x, _)| *x >= xr.0 && *x <= xr.1)
-            .collect()
+        self.segments(c.points, xr, yr).concat()
+    }
+
+    /// The runs of drawable points in the plotted x range: a point that cannot be drawn (an
+    /// empty histogram bin on a log axis) breaks the line instead of being bridged or drawn at
+    /// the axis floor.
+    fn segments(
+        &self,
+        points: &[(f64, f64)],
+        xr: (f64, f64),
+        yr: (f64, f64),
+    ) -> Vec<Vec<(f64, f64)>> {
+        let mut out: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+        for &p in points {
+            if self.drawable(&p) && p.0 >= xr.0 && p.0 <= xr.1 {
+                out.last_mut()
+                    .expect("one run")
+                    .push((p.0, p.1.clamp(yr.0, yr.1)));
+            } else if !out.last().expect("one run").is_empty() {
+                out.push(Vec::new());
+            }
+        }
+        out.retain(|r| !r.is_empty());
+        out
+    }
+
+    /// The band of a curve as closed polygons, one per run of x where both edges are drawable.
+    fn band_polygons(
+        &self,
+        band: &[(f64, f64, f64)],
+        xr: (f64, f64),
+        yr: (f64, f64),
+    ) -> Vec<Vec<(f64, f64)>> {
+        let lo: Vec<(f64, f64)> = band.iter().map(|&(x, l, _)| (x, l)).collect();
+        let hi: Vec<(f64, f64)> = band.iter().map(|&(x, _, h)| (x, h)).collect();
+        // A run needs both edges: an empty lower edge on a log axis drops to the axis floor.
+        let mut runs = Vec::new();
+        for run in self.segments(&hi, xr, yr) {
+            let (a, b) = (run[0].0, run[run.len() - 1].0);
+            let low: Vec<(f64, f64)> = lo
+                .iter()
+                .filter(|p| p.0 >= a && p.0 <= b)
+                .map(|&(x, y)| {
+                    let y = if self.drawable(&(x, y)) { y } else { yr.0 };
+                    (x, y.clamp(yr.0, yr.1))
+                })
+                .collect();
+            let mut poly = run.clone();
+            poly.extend(low.into_iter().rev());
+            runs.push(poly);
+        }
+        runs
     }
 
     /// Axis ranges: explicit ones checked, others from the data with a margin.
@@ -538,19 +642,36 @@ where
         .draw()
         .map_err(err)?;
     for c in &spec.curves {
+        if let Some(band) = c.band {
+            for poly in spec.band_polygons(band, xr, yr) {
+                chart
+                    .draw_series(std::iter::once(Polygon::new(
+                        poly,
+                        c.color.mix(0.2).filled(),
+                    )))
+                    .map_err(err)?;
+            }
+        }
+    }
+    for c in &spec.curves {
         let pts = spec.visible(c, xr, yr);
+        let runs = spec.segments(c.points, xr, yr);
         let color = c.color;
         let style = color.stroke_width(2);
         let lines = matches!(c.marks, Marks::Lines | Marks::LinesAndPoints);
         let markers = matches!(c.marks, Marks::Points | Marks::LinesAndPoints);
-        // The legend entry hangs on the first element drawn for the curve.
+        // The legend entry hangs on the first element drawn for the curve; lines are drawn run
+        // by run (gaps at points that cannot be drawn).
         let anno = if lines && c.dashed {
             chart
-                .draw_series(DashedLineSeries::new(pts.clone(), 10, 6, style))
+                .draw_series(
+                    runs.iter()
+                        .flat_map(|r| DashedLineSeries::new(r.clone(), 10, 6, style)),
+                )
                 .map_err(err)?
         } else if lines {
             chart
-                .draw_series(LineSeries::new(pts.clone(), style))
+                .draw_series(runs.iter().flat_map(|r| LineSeries::new(r.clone(), style)))
                 .map_err(err)?
         } else {
             chart
@@ -722,6 +843,54 @@ mod tests {
                 (f, p)
             })
             .collect()
+    }
+
+    #[test]
+    fn seed_band_is_the_mean_and_spread_on_the_common_bins() {
+        let a = vec![(0.05, 1.0), (0.15, 2.0)];
+        let b = vec![(0.05, 3.0), (0.15, 0.0), (0.25, 4.0)];
+        let SeedBand { mean, band } = seed_band(&[a.clone(), b]).unwrap();
+        assert_eq!(mean.len(), 3);
+        assert!((mean[0].1 - 2.0).abs() < 1e-12 && (mean[2].1 - 2.0).abs() < 1e-12);
+        assert!((mean[2].0 - 0.25).abs() < 1e-12);
+        assert_eq!((band[1].1, band[1].2), (0.0, 2.0));
+        // A bin a seed lacks is empty for it: the band reaches 0.
+        assert_eq!((band[2].1, band[2].2), (0.0, 4.0));
+        // Another bin width: no band.
+        assert!(seed_band(&[a.clone(), vec![(0.1, 1.0), (0.3, 1.0)]]).is_none());
+        assert!(seed_band(&[a]).is_none());
+    }
+
+    #[test]
+    fn lines_break_at_points_that_cannot_be_drawn() {
+        let pts = [
+            (0.1, 1.0),
+            (0.2, 0.0),
+            (0.3, 2.0),
+            (0.4, 3.0),
+            (0.5, f64::NAN),
+        ];
+        let c = Series::new("p", &pts);
+        let spec = Spec {
+            title: "t",
+            x_label: "x",
+            y_label: "y",
+            curves: vec![Curve::new(&c, BLACK, Marks::Lines)],
+            x_axis: Axis::Linear,
+            y_axis: Axis::Log,
+            x_range: None,
+            y_range: None,
+            legend_lower_right: false,
+        };
+        let runs = spec.segments(&pts, (0.0, 1.0), (1e-3, 10.0));
+        assert_eq!(runs, vec![vec![(0.1, 1.0)], vec![(0.3, 2.0), (0.4, 3.0)]]);
+        // The band's polygon closes along its lower edge, an empty bin at the axis floor.
+        let band = [(0.3, 0.0, 2.0), (0.4, 1.0, 3.0)];
+        let poly = spec.band_polygons(&band, (0.0, 1.0), (1e-3, 10.0));
+        assert_eq!(
+            poly,
+            vec![vec![(0.3, 2.0), (0.4, 3.0), (0.4, 1.0), (0.3, 1e-3)]]
+        );
     }
 
     #[test]
