@@ -122,9 +122,19 @@ fn write_outputs(
     )?;
     let labels: Vec<String> = analyses.iter().map(|(c, _)| c.clone()).collect();
     let analyses: Vec<Analysis> = analyses.into_iter().map(|(_, a)| a).collect();
-    crate::reproduce::write_plots(out, &labels, &analyses, false);
+    let plots = crate::reproduce::write_plots(out, &labels, &analyses, false);
+    let svgs: Vec<PathBuf> = plots
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+        .collect();
+    grainbench_comparisons::report::html::write(
+        out,
+        &format!("grainbench compare {}", cmp.scene),
+        &cmp.to_markdown(true),
+        &svgs,
+    )?;
     eprintln!(
-        "wrote {0}/compare.md, compare.csv, compare.json, pf.svg/png, gr.svg/png{1}",
+        "wrote {0}/compare.md, compare.csv, compare.json, report.html, pf.svg/png, gr.svg/png{1}",
         out.display(),
         if cmp.failures.is_empty() {
             String::new()

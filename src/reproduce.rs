@@ -173,6 +173,17 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             Err(e) => eprintln!("warning: no consolidation plot: {e}"),
         }
     }
+    let svgs: Vec<PathBuf> = plotted
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+        .cloned()
+        .collect();
+    let html = grainbench_comparisons::report::html::write(
+        &out,
+        &format!("grainbench reproduce {} --state {}", a.paper, a.state),
+        &table.to_markdown(),
+        &svgs,
+    )?;
     let not_equilibrated: Vec<u64> = runs
         .iter()
         .filter(|r| r.status != "equilibrium")
@@ -186,6 +197,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         );
     }
     println!("report     {}", out.join("report.md").display());
+    println!("report     {}", html.display());
     for p in plotted {
         println!("plot       {}", p.display());
     }

@@ -79,6 +79,45 @@ fn the_reference_adapter_runs_the_exchange_and_lands_in_the_bands() {
     assert_eq!(r["metrics"]["pressure"].as_f64().unwrap().round(), 1.0);
     let md = std::fs::read_to_string(out.join("compare.md")).unwrap();
     assert!(md.contains("| ref |"), "{md}");
+    // report.html, as a browser sees it: the tables and the inlined P(f) and g(r).
+    if let Some(dom) = render(&out.join("report.html")) {
+        assert!(
+            dom.matches("<table>").count() >= 2,
+            "the outcome and metric tables: {dom}"
+        );
+        assert!(dom.contains("<td>ref</td>"), "the adapter's row");
+        assert_eq!(dom.matches("<svg").count(), 2, "P(f) and g(r) inlined");
+        assert!(dom.contains("Normal force distribution") && dom.contains("Pair correlation"));
+    }
+}
+
+/// The DOM headless Chromium builds from `html` (Debian's `chromium`, installed by
+/// ci/setup.sh); `None` where it is not installed, outside CI.
+fn render(html: &Path) -> Option<String> {
+    let Some(chromium) = ["chromium", "chromium-browser"]
+        .iter()
+        .find_map(|b| grainbench_comparisons::xcode::which(b))
+    else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI: headless Chromium is needed to check report.html (apt-get install -y --no-install-recommends chromium; ci/setup.sh does)"
+        );
+        eprintln!("skipping the browser check of report.html: chromium not installed");
+        return None;
+    };
+    let profile = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(chromium)
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--dump-dom"])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .arg(format!("file://{}", html.display()))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "chromium: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    Some(String::from_utf8_lossy(&out.stdout).into_owned())
 }
 
 fn adapter_file(dir: &Path, text: &str) -> PathBuf {

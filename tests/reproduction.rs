@@ -98,6 +98,11 @@ fn check_ci_scene_in(scene: &str) -> (Value, tempfile::TempDir) {
     let report: Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("report.json")).unwrap()).unwrap();
     assert!(dir.path().join("pf.svg").exists() && dir.path().join("gr.png").exists());
+    let html = std::fs::read_to_string(dir.path().join("report.html")).unwrap();
+    assert!(
+        html.contains("<table>") && html.matches("<svg").count() >= 2,
+        "report.html holds the table and the plots"
+    );
     let mut failures = Vec::new();
     for b in &bands {
         let metric = b.metric.trim_end_matches(" (gold)");

@@ -327,7 +327,16 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
     )?;
     write_atomic(&out.join("bench.csv"), to_csv(&report).as_bytes())?;
     write_atomic(&out.join("bench.md"), md.as_bytes())?;
-    eprintln!("wrote {0}/bench.md, bench.csv, bench.json", out.display());
+    grainbench_comparisons::report::html::write(
+        &out,
+        &format!("grainbench bench {}", scene.name),
+        &md,
+        &[],
+    )?;
+    eprintln!(
+        "wrote {0}/bench.md, bench.csv, bench.json, report.html",
+        out.display()
+    );
     Ok(if STOP.load(Ordering::SeqCst) { 130 } else { 0 })
 }
 

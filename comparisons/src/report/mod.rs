@@ -5,9 +5,11 @@
 //! * [`paper`]: the published values of `golden/paper-values.toml` (SPEC §6).
 //! * [`reproduction`]: our values over seeds against the published ones, with verdicts.
 //! * [`plots`]: P(f) with the DTS fit, g(r) and generic line plots as SVG + PNG.
+//! * [`html`]: `report.html`, a Markdown report with its plots inlined.
 
 pub mod analysis;
 pub mod format;
+pub mod html;
 pub mod paper;
 pub mod plots;
 pub mod reproduction;
