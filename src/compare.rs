@@ -160,6 +160,7 @@ fn run_rust(
         force: true,
         checkpoint_every: 60.0,
         dump_every: None,
+        trace_every: None,
         stage_snapshots: false,
     };
     r.version = Some(format!("grainbench {}", env!("CARGO_PKG_VERSION")));

@@ -28,6 +28,7 @@ pub fn run_exchange(input: &Path, output: &Path, quiet: bool) -> Result<i32> {
         force: true,
         checkpoint_every: 0.0,
         dump_every: None,
+        trace_every: None,
         stage_snapshots: false,
     };
     let (code, outcome) = run(&scene, &work, &flags)?;
@@ -87,6 +88,7 @@ fn scene_of(ex: &Exchange, particles: &Path) -> Result<Scene> {
             rms_velocity: 0.0,
             snapshot: None,
             particles: Some(std::path::absolute(particles)?),
+            grains: None,
             cell: Some(ex.cell.lengths.clone()),
         },
         numerics: ex.numerics.clone(),

@@ -21,6 +21,7 @@ mod exchange;
 mod external;
 mod reproduce;
 mod run;
+mod trace;
 mod xcode;
 
 #[derive(Parser)]
@@ -72,6 +73,13 @@ enum Command {
         /// `<out>/vtk/run.pvd`; a resumed run extends the series.
         #[arg(long, value_name = "T")]
         dump_every: Option<f64>,
+        /// Few-body runs (≤ 1000 grains): record every grain and contact at the first check
+        /// at or after each multiple of T into `<out>/trace-grains.csv` and
+        /// `trace-contacts.csv`; with two grains also their impact (`impact.json`: duration,
+        /// peak force, restitution, angles, spins, with Hertz's values). Set the scene's
+        /// `numerics.check_every = 1` for a frame every step.
+        #[arg(long, value_name = "T")]
+        trace_every: Option<f64>,
         /// Write the state at the end of each stage into `<out>/stages/stage-KKK.snap.json`
         /// (K as in the progress line, from 0): the points of a pressure program.
         #[arg(long)]
@@ -335,9 +343,17 @@ fn dispatch(cli: Cli) -> Result<i32> {
             checkpoint_every,
             seed,
             dump_every,
+            trace_every,
             stage_snapshots,
         } => {
             set_threads(threads)?;
+            if let Some(t) = trace_every {
+                if !(t.is_finite() && t > 0.0) {
+                    anyhow::bail!(
+                        "--trace-every {t}: give a positive time in the scene's reduced units"
+                    );
+                }
+            }
             if let Some(t) = dump_every {
                 if !(t.is_finite() && t > 0.0) {
                     anyhow::bail!(
@@ -352,6 +368,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 force,
                 checkpoint_every,
                 dump_every,
+                trace_every,
                 stage_snapshots,
             };
             run::run_command(scene.as_deref(), out, seed, require_equilibrium, &flags)
@@ -415,6 +432,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                     force: false,
                     checkpoint_every,
                     dump_every: None,
+                    trace_every: None,
                     stage_snapshots: false,
                 },
             })

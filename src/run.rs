@@ -29,6 +29,8 @@ pub struct RunFlags {
     pub checkpoint_every: f64,
     /// Write a ParaView frame every so much simulated time into `<out>/vtk/` (`--dump-every`).
     pub dump_every: Option<f64>,
+    /// Record every grain and contact every so much simulated time (`--trace-every`).
+    pub trace_every: Option<f64>,
     /// Write the state at the end of each stage into `<out>/stages/` (`--stage-snapshots`).
     pub stage_snapshots: bool,
 }
@@ -241,10 +243,28 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
     let vtk_dir = out.join("vtk");
     let mut dump_failed = false;
     let mut frames = 0usize;
+    if flags.trace_every.is_some() && scene.particles.count > crate::trace::MAX_TRACE_GRAINS {
+        bail!(
+            "--trace-every keeps every frame in memory: for few-body scenes (at most {} grains), this one has {}; use --dump-every for ParaView frames",
+            crate::trace::MAX_TRACE_GRAINS,
+            scene.particles.count
+        );
+    }
+    let mut trace: Vec<snapshot::Snapshot> = Vec::new();
+    let mut last_vtk: Option<u64> = None;
     let mut on_dump = |snap: &snapshot::Snapshot| {
-        if dump_failed {
+        if flags.trace_every.is_some() {
+            trace.push(snap.clone());
+        }
+        // With a trace the frames come every trace interval: ParaView's at its own.
+        let Some(every) = flags.dump_every else {
+            return;
+        };
+        let k = (snap.time / every).floor() as u64;
+        if dump_failed || last_vtk == Some(k) {
             return;
         }
+        last_vtk = Some(k);
         let prefix = vtk::frame_prefix(snap.step);
         let written = vtk::write_frame(snap, &vtk_dir, &prefix)
             .and_then(|_| vtk::write_series(&vtk_dir, "run.pvd"));
@@ -289,11 +309,14 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                 every: flags.checkpoint_every,
             }),
             resume,
-            dump: flags.dump_every.map(|every| DumpSpec {
-                every,
-                sink: &mut on_dump,
-                last: None,
-            }),
+            dump: flags
+                .trace_every
+                .or(flags.dump_every)
+                .map(|every| DumpSpec {
+                    every,
+                    sink: &mut on_dump,
+                    last: None,
+                }),
             stage_end: flags
                 .stage_snapshots
                 .then_some(&mut on_stage_end as &mut StageEndHook),
@@ -325,6 +348,20 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
     };
     let snap_path = out.join(&scene.output.snapshot);
     outcome.snapshot.write(&snap_path)?;
+    if flags.trace_every.is_some() {
+        // The final state closes the series (the last frame may be a check earlier).
+        if trace.last().is_none_or(|f| f.step != outcome.snapshot.step) {
+            trace.push(outcome.snapshot.clone());
+        }
+        if let Some(r) = crate::trace::write(out, scene, &trace)? {
+            eprint!("{}", crate::trace::describe(&r));
+        }
+        eprintln!(
+            "trace      {} frames in {}/trace-grains.csv, trace-contacts.csv",
+            trace.len(),
+            out.display()
+        );
+    }
     let summary = serde_json::json!({
         "scene": scene.name,
         "seed": scene.seed,

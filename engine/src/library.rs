@@ -15,6 +15,8 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "xcode-cohesive-rr-smoke",
     "xcode-sjkr-smoke",
     "xcode-dmt-smoke",
+    "impact-normal",
+    "impact-oblique",
     "ar07-A-n1372",
     "ar07-D-10kPa-n1372",
     "ar07-A",

@@ -124,6 +124,7 @@ fn child_run(a: &Args) -> Result<i32> {
         force: true,
         checkpoint_every: 1e12,
         dump_every: None,
+        trace_every: None,
         stage_snapshots: false,
     };
     Ok(run(&scene, out, &flags)?.0)

@@ -51,6 +51,7 @@ pub mod fixed_rattlers;
 pub mod force_distribution;
 pub mod fractal_fit;
 pub mod holes;
+pub mod impact;
 mod math;
 pub mod moduli;
 mod neighbors;

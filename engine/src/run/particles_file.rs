@@ -10,36 +10,76 @@ use std::path::Path;
 /// `diameter` and optionally `vx`, `vy`, (`vz`), by header name; errors name the file, the
 /// row and the column.
 pub fn read<D: Dim>(path: &Path, cell: &[f64], n: usize) -> Result<Grains<D>, String> {
-    let file = path.display();
+    let rd = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_path(path)
+        .map_err(|e| format!("initial.particles {}: {e}", path.display()))?;
+    parse(
+        rd,
+        &format!("initial.particles {}", path.display()),
+        cell,
+        n,
+    )
+}
+
+/// The grains of a scene's `initial.grains` (one map of column → value per grain).
+pub fn inline<D: Dim>(
+    grains: &[std::collections::BTreeMap<String, f64>],
+    cell: &[f64],
+    n: usize,
+) -> Result<Grains<D>, String> {
+    let names: std::collections::BTreeSet<&String> = grains.iter().flat_map(|g| g.keys()).collect();
+    let names: Vec<&String> = names.into_iter().collect();
+    let mut text = names
+        .iter()
+        .map(|s| s.as_str())
+        .collect::<Vec<_>>()
+        .join(",")
+        + "\n";
+    for g in grains {
+        let row: Vec<String> = names
+            .iter()
+            .map(|k| match g.get(*k) {
+                Some(x) => format!("{x:?}"),
+                // A grain without a velocity listed is at rest.
+                None if ["vx", "vy", "vz"].contains(&k.as_str()) => "0".into(),
+                None => String::new(),
+            })
+            .collect();
+        text += &(row.join(",") + "\n");
+    }
+    let rd = csv::ReaderBuilder::new().from_reader(text.as_bytes());
+    parse(rd, "initial.grains", cell, n)
+}
+
+fn parse<D: Dim, R: std::io::Read>(
+    mut rd: csv::Reader<R>,
+    file: &str,
+    cell: &[f64],
+    n: usize,
+) -> Result<Grains<D>, String> {
     if cell.len() != D::D || cell.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
         return Err(format!(
-            "initial.cell: a `particles` start needs the {} side lengths of the periodic cell, positive (e.g. cell = [{}]), got {cell:?}",
+            "initial.cell: a `particles` or `grains` start needs the {} side lengths of the periodic cell, positive (e.g. cell = [{}]), got {cell:?}",
             D::D,
             vec!["20.0"; D::D].join(", ")
         ));
     }
-    let mut rd = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .comment(Some(b'#'))
-        .from_path(path)
-        .map_err(|e| format!("initial.particles {file}: {e}"))?;
-    let header = rd
-        .headers()
-        .map_err(|e| format!("initial.particles {file}: {e}"))?
-        .clone();
+    let header = rd.headers().map_err(|e| format!("{file}: {e}"))?.clone();
     let column = |name: &str| header.iter().position(|h| h == name);
     let axes = ["x", "y", "z"];
     let mut pos_cols = Vec::new();
     for a in axes.iter().take(D::D) {
         pos_cols.push(column(a).ok_or_else(|| {
             format!(
-                "initial.particles {file}: no column `{a}` in the header (need x, y{}, diameter)",
+                "{file}: no column `{a}` in the header (need x, y{}, diameter)",
                 if D::D == 3 { ", z" } else { "" }
             )
         })?);
     }
-    let d_col = column("diameter")
-        .ok_or_else(|| format!("initial.particles {file}: no column `diameter` in the header"))?;
+    let d_col =
+        column("diameter").ok_or_else(|| format!("{file}: no column `diameter` in the header"))?;
     let vel_cols: Option<Vec<usize>> = ["vx", "vy", "vz"]
         .iter()
         .take(D::D)
@@ -48,7 +88,7 @@ pub fn read<D: Dim>(path: &Path, cell: &[f64], n: usize) -> Result<Grains<D>, St
     let l = D::from_slice(cell);
     let (mut s, mut u, mut diameter) = (Vec::new(), Vec::new(), Vec::new());
     for (k, row) in rd.records().enumerate() {
-        let row = row.map_err(|e| format!("initial.particles {file}: {e}"))?;
+        let row = row.map_err(|e| format!("{file}: {e}"))?;
         let line = k + 2;
         let num = |c: usize| -> Result<f64, String> {
             let text = row.get(c).unwrap_or("");
@@ -57,7 +97,7 @@ pub fn read<D: Dim>(path: &Path, cell: &[f64], n: usize) -> Result<Grains<D>, St
                 .filter(|x| x.is_finite())
                 .ok_or_else(|| {
                     format!(
-                        "initial.particles {file}: line {line}, column `{}`: expected a finite number, got \"{text}\"",
+                        "{file}: line {line}, column `{}`: expected a finite number, got \"{text}\"",
                         &header[c]
                     )
                 })
@@ -69,7 +109,7 @@ pub fn read<D: Dim>(path: &Path, cell: &[f64], n: usize) -> Result<Grains<D>, St
         let d = num(d_col)?;
         if !(d > 0.0 && d <= 1.0) {
             return Err(format!(
-                "initial.particles {file}: line {line}, column `diameter`: must lie in (0, 1] (lengths in units of the largest diameter a), got {d}"
+                "{file}: line {line}, column `diameter`: must lie in (0, 1] (lengths in units of the largest diameter a), got {d}"
             ));
         }
         let mut v = D::V::zero();
@@ -84,7 +124,7 @@ pub fn read<D: Dim>(path: &Path, cell: &[f64], n: usize) -> Result<Grains<D>, St
     }
     if s.len() != n {
         return Err(format!(
-            "initial.particles {file}: lists {} grains, the scene wants {n} (particles.count)",
+            "{file}: lists {} grains, the scene wants {n} (particles.count)",
             s.len()
         ));
     }

@@ -33,9 +33,12 @@ pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
     if let Some(path) = &scene.initial.snapshot {
         return snapshot_grains(path, n);
     }
+    let cell = scene.initial.cell.as_deref().unwrap_or_default();
     if let Some(path) = &scene.initial.particles {
-        let cell = scene.initial.cell.as_deref().unwrap_or_default();
         return super::particles_file::read::<D>(path, cell, n);
+    }
+    if let Some(grains) = &scene.initial.grains {
+        return super::particles_file::inline::<D>(grains, cell, n);
     }
     let (l, s, diameter) = match scene.initial.arrangement {
         Arrangement::Random => {

@@ -236,7 +236,12 @@ pub struct Initial {
     /// match it; a relative path is taken from the working directory.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub particles: Option<PathBuf>,
-    /// Side lengths of the periodic cell (a) of a `particles` start.
+    /// The same grains listed in the scene itself, one table per grain with the columns of a
+    /// `particles` file as keys: `grains = [{ x = 5.0, y = 5.0, z = 5.0, diameter = 1.0 }, …]`
+    /// (few-body scenes: impacts, chains). Needs `cell`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grains: Option<Vec<std::collections::BTreeMap<String, f64>>>,
+    /// Side lengths of the periodic cell (a) of a `particles` or `grains` start.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cell: Option<Vec<f64>>,
 }

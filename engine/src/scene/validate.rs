@@ -267,18 +267,24 @@ impl Scene {
             }
         }
         let phi = self.initial.packing_fraction;
-        let from_file = self.initial.snapshot.is_some() || self.initial.particles.is_some();
-        if self.initial.snapshot.is_some() && self.initial.particles.is_some() {
+        let listed = self.initial.particles.is_some() || self.initial.grains.is_some();
+        let from_file = self.initial.snapshot.is_some() || listed;
+        let starts = [
+            self.initial.snapshot.is_some(),
+            self.initial.particles.is_some(),
+            self.initial.grains.is_some(),
+        ];
+        if starts.iter().filter(|s| **s).count() > 1 {
             return Err(err(
-                "initial.particles",
-                "a scene starts from `snapshot` or from `particles`, not both".into(),
+                "initial",
+                "a scene starts from one of `snapshot`, `particles` (a CSV file) or `grains` (listed in the scene), not several".into(),
             ));
         }
         match &self.initial.cell {
-            Some(cell) if self.initial.particles.is_none() => {
+            Some(cell) if !listed => {
                 return Err(err(
                     "initial.cell",
-                    format!("{cell:?} is only read with `initial.particles`; remove it, or list the grains in a CSV file named by `particles`"),
+                    format!("{cell:?} is only read with `initial.particles` or `initial.grains`; remove it, or list the grains"),
                 ))
             }
             Some(cell)
@@ -293,11 +299,11 @@ impl Scene {
                     ),
                 ))
             }
-            None if self.initial.particles.is_some() => {
+            None if listed => {
                 return Err(err(
                     "initial.cell",
                     format!(
-                        "a `particles` start needs the periodic cell's side lengths, e.g. cell = [{}]",
+                        "a `particles` or `grains` start needs the periodic cell's side lengths, e.g. cell = [{}]",
                         vec!["20.0"; self.dimension].join(", ")
                     ),
                 ))
