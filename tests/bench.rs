@@ -68,7 +68,7 @@ fn rust_fixed_steps_writes_every_run_and_unit_ratio() {
     assert!(std::fs::read_to_string(out.join("bench.md"))
         .unwrap()
         .contains("| rust |"));
-    // Only the three reports and the run directories: no temporaries left.
+    // Only the four reports and the run directories: no temporaries left.
     let mut names: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -76,7 +76,14 @@ fn rust_fixed_steps_writes_every_run_and_unit_ratio() {
     names.sort();
     assert_eq!(
         names,
-        ["bench.csv", "bench.json", "bench.md", "runs", "scene.toml"]
+        [
+            "bench.csv",
+            "bench.json",
+            "bench.md",
+            "report.html",
+            "runs",
+            "scene.toml"
+        ]
     );
 }
 
