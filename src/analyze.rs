@@ -72,6 +72,7 @@ impl DumpMeta {
                 force_unit: String::new(),
                 n: 0,
                 data: Default::default(),
+                trace: None,
             }
         };
         if let Some(d) = self.dimension {

@@ -8,10 +8,12 @@ use crate::external::{self, clean_version};
 use crate::run::{run, RunFlags};
 use crate::xcode;
 use anyhow::{bail, Context, Result};
+use grainbench_comparisons::metrics::impact::ImpactReport;
 use grainbench_comparisons::metrics::Analysis;
 use grainbench_comparisons::outcome::Outcome;
-use grainbench_comparisons::xcode::crosscode::{self, Bands, CodeResult, Comparison};
+use grainbench_comparisons::xcode::crosscode::{self, Bands, CodeImpact, CodeResult, Comparison};
 use grainbench_comparisons::xcode::decks::{self, Code, StageKind, Start};
+use grainbench_comparisons::xcode::import::{self, Meta};
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -62,6 +64,8 @@ pub fn compare(a: &Args) -> Result<i32> {
     );
     let mut results = Vec::new();
     let mut analyses: Vec<(String, Analysis)> = Vec::new();
+    // A traced two-body scene is an impact test in every code.
+    let mut impacts = (scene.output.trace_every.is_some() && start.n() == 2).then(Vec::new);
     for &code in &codes {
         if STOP.load(Ordering::SeqCst) {
             break;
@@ -77,6 +81,14 @@ pub fn compare(a: &Args) -> Result<i32> {
             Code::Rust => run_rust(&scene, &dir, a.quiet, &mut r)?,
             _ => external::run(&start, code, &dir, a.time_limit, a.np, a.quiet, &mut r)?,
         };
+        if let (Some(snap), Some(list)) = (&snap, impacts.as_mut()) {
+            if let Some(report) = impact_of(code, &dir, &scene, snap)? {
+                list.push(CodeImpact {
+                    code: code.name().into(),
+                    report,
+                });
+            }
+        }
         if let Some(snap) = snap {
             let analysis = analysis_with_moduli(&snap, &scene);
             r.metrics = analysis.metric_values().into_iter().collect();
@@ -95,12 +107,13 @@ pub fn compare(a: &Args) -> Result<i32> {
         );
         results.push(r);
     }
-    let cmp = crosscode::build(
+    let cmp = crosscode::build_with(
         &scene.name,
         start.n(),
         Some(scene.paper_state.as_deref().unwrap_or(&scene.name)),
         results,
         &Bands::embedded(),
+        impacts,
     );
     write_outputs(&out, &cmp, analyses, a.all_metrics)?;
     Ok(if cmp.failures.is_empty() { 0 } else { 1 })
@@ -143,6 +156,35 @@ fn write_outputs(
         }
     );
     Ok(())
+}
+
+/// The impact of a traced two-body run: ours wrote `impact.json` itself; an external code's
+/// trace is read (closed by its final state), written as ours is (`trace-grains.csv`,
+/// `trace-contacts.csv`, `impact.json`) and measured the same way.
+fn impact_of(
+    code: Code,
+    dir: &Path,
+    scene: &grainbench_engine::Scene,
+    last: &Snapshot,
+) -> Result<Option<ImpactReport>> {
+    if code == Code::Rust {
+        let path = dir.join("impact.json");
+        if !path.exists() {
+            return Ok(None);
+        }
+        let text = std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?;
+        return Ok(Some(
+            serde_json::from_slice(&text).with_context(|| format!("reading {}", path.display()))?,
+        ));
+    }
+    let meta = Meta::read(dir)?;
+    let Some(mut frames) = import::trace::read(code, dir, &meta)? else {
+        return Ok(None);
+    };
+    if frames.last().is_some_and(|f| f.step < last.step) {
+        frames.push(last.clone());
+    }
+    crate::trace::write(dir, scene, &frames)
 }
 
 /// Our engine, in this process.

@@ -9,6 +9,7 @@ use grainbench_engine::run::{
     CheckpointSpec, Checks, DumpSpec, Outcome, Progress, RunError, RunOptions, StageEndHook,
     StepEnd, StepReport,
 };
+use grainbench_engine::scene::MAX_TRACE_GRAINS;
 use grainbench_engine::{snapshot, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -243,17 +244,19 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
     let vtk_dir = out.join("vtk");
     let mut dump_failed = false;
     let mut frames = 0usize;
-    if flags.trace_every.is_some() && scene.particles.count > crate::trace::MAX_TRACE_GRAINS {
+    // The command line's interval, else the scene's (`output.trace_every`).
+    let trace_every = flags.trace_every.or(scene.output.trace_every);
+    if trace_every.is_some() && scene.particles.count > MAX_TRACE_GRAINS {
         bail!(
             "--trace-every keeps every frame in memory: for few-body scenes (at most {} grains), this one has {}; use --dump-every for ParaView frames",
-            crate::trace::MAX_TRACE_GRAINS,
+            MAX_TRACE_GRAINS,
             scene.particles.count
         );
     }
     let mut trace: Vec<snapshot::Snapshot> = Vec::new();
     let mut last_vtk: Option<u64> = None;
     let mut on_dump = |snap: &snapshot::Snapshot| {
-        if flags.trace_every.is_some() {
+        if trace_every.is_some() {
             trace.push(snap.clone());
         }
         // With a trace the frames come every trace interval: ParaView's at its own.
@@ -309,14 +312,11 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                 every: flags.checkpoint_every,
             }),
             resume,
-            dump: flags
-                .trace_every
-                .or(flags.dump_every)
-                .map(|every| DumpSpec {
-                    every,
-                    sink: &mut on_dump,
-                    last: None,
-                }),
+            dump: trace_every.or(flags.dump_every).map(|every| DumpSpec {
+                every,
+                sink: &mut on_dump,
+                last: None,
+            }),
             stage_end: flags
                 .stage_snapshots
                 .then_some(&mut on_stage_end as &mut StageEndHook),
@@ -348,7 +348,7 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
     };
     let snap_path = out.join(&scene.output.snapshot);
     outcome.snapshot.write(&snap_path)?;
-    if flags.trace_every.is_some() {
+    if trace_every.is_some() {
         // The final state closes the series (the last frame may be a check earlier).
         if trace.last().is_none_or(|f| f.step != outcome.snapshot.step) {
             trace.push(outcome.snapshot.clone());

@@ -5,31 +5,10 @@
 //! against.
 
 use anyhow::Result;
-use grainbench_comparisons::metrics::impact::{self, Hertz, Impact};
-use grainbench_engine::scene::{Law, Mu, Scene};
+use grainbench_comparisons::metrics::impact::{self, ImpactReport};
+use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
-use serde::Serialize;
 use std::path::Path;
-
-/// Most grains a trace keeps in memory (one snapshot per frame).
-pub const MAX_TRACE_GRAINS: usize = 1000;
-
-/// What `impact.json` holds.
-#[derive(Serialize)]
-pub struct ImpactReport {
-    pub measured: Impact,
-    /// Hertz's elastic impact (ζ = 0) for the measured approach speed.
-    pub hertz: Option<Hertz>,
-    /// Tangential contact-point speed and spins after an impact that slides throughout (ζ = 0,
-    /// finite μ), when the impulse balance says it does.
-    pub sliding: Option<Sliding>,
-}
-
-#[derive(Serialize)]
-pub struct Sliding {
-    pub tangential_speed_after: f64,
-    pub spin_gained: [f64; 2],
-}
 
 /// Writes the trace of `frames` into `out`; with two grains, also `impact.json`, returned.
 pub fn write(out: &Path, scene: &Scene, frames: &[Snapshot]) -> Result<Option<ImpactReport>> {
@@ -94,70 +73,12 @@ pub fn write(out: &Path, scene: &Scene, frames: &[Snapshot]) -> Result<Option<Im
     let Some(measured) = impact::measure(frames) else {
         return Ok(None);
     };
-    let report = analytic(scene, first, measured);
+    let report = impact::against_theory(scene, first, measured);
     write_atomic(
         &out.join("impact.json"),
         (serde_json::to_string_pretty(&report)? + "\n").as_bytes(),
     )?;
     Ok(Some(report))
-}
-
-/// The analytic values for an undamped Hertz–Mindlin pair.
-fn analytic(scene: &Scene, s: &Snapshot, measured: Impact) -> ImpactReport {
-    let Law::HertzMindlin {
-        kappa,
-        mu,
-        zeta,
-        sjkr: None,
-        dmt: None,
-        ..
-    } = &scene.law
-    else {
-        return ImpactReport {
-            measured,
-            hertz: None,
-            sliding: None,
-        };
-    };
-    if *zeta != 0.0 || s.dimension != 3 {
-        return ImpactReport {
-            measured,
-            hertz: None,
-            sliding: None,
-        };
-    }
-    let p = &s.particles;
-    let (m, r) = ([p.mass[0], p.mass[1]], [p.radius[0], p.radius[1]]);
-    let m_eff = m[0] * m[1] / (m[0] + m[1]);
-    let r_eff = r[0] * r[1] / (r[0] + r[1]);
-    // AR07 (1): N = (2/3) Ẽ √R* h^{3/2}, Ẽ = κ^{3/2} in reduced units.
-    let k = 2.0 / 3.0 * kappa.powf(1.5) * r_eff.sqrt();
-    let v_n = measured.normal_speed_before;
-    let hertz = Some(Hertz::new(m_eff, k, v_n));
-    let sliding = match mu {
-        Mu::Finite(mu) if *mu > 0.0 && measured.tangential_speed_before > 0.0 => {
-            let inertia = [0.4 * m[0] * r[0] * r[0], 0.4 * m[1] * r[1] * r[1]];
-            let (vt, dw) = impact::sliding_throughout(
-                m,
-                r,
-                inertia,
-                *mu,
-                1.0,
-                v_n,
-                measured.tangential_speed_before,
-            );
-            (vt > 0.0).then_some(Sliding {
-                tangential_speed_after: vt,
-                spin_gained: dw,
-            })
-        }
-        _ => None,
-    };
-    ImpactReport {
-        measured,
-        hertz,
-        sliding,
-    }
 }
 
 /// The report as a few lines for the terminal.

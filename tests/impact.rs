@@ -79,3 +79,53 @@ fn a_trace_of_a_large_scene_is_refused() {
         .failure()
         .stderr(predicates::str::contains("few-body"));
 }
+
+/// The same impact in every installed code, read from its trace (`output.trace_every`):
+/// `compare` checks each against Hertz and the sliding balance and fails otherwise. Under CI
+/// (CI=true) every code must be installed and have measured an impact.
+#[test]
+fn oblique_impact_in_every_code_matches_the_analytic_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cmp");
+    let run = Command::cargo_bin("grainbench")
+        .unwrap()
+        .args([
+            "compare",
+            "impact-oblique",
+            "--codes",
+            "rust,lammps,lammps-2025,liggghts,yade",
+            "-q",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&run.stdout);
+    println!("{text}");
+    assert!(run.status.success(), "{text}");
+    let cmp: Value =
+        serde_json::from_slice(&std::fs::read(out.join("compare.json")).unwrap()).unwrap();
+    let ran: Vec<&str> = cmp["codes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["outcome"] == "ran")
+        .map(|c| c["code"].as_str().unwrap())
+        .collect();
+    if std::env::var_os("CI").is_some() {
+        assert_eq!(ran.len(), 5, "every code must run under CI: {ran:?}");
+    }
+    let impacts = cmp["impacts"].as_array().unwrap();
+    assert_eq!(impacts.len(), ran.len(), "an impact per code that ran");
+    for i in impacts {
+        let m = &i["report"]["measured"];
+        assert!(
+            (f(&m["incidence_angle"]) - 5f64.atan().to_degrees()).abs() < 0.01,
+            "{i}"
+        );
+        // Each code's trace was written as ours is.
+        let code = i["code"].as_str().unwrap();
+        assert!(out.join(code).join("trace-contacts.csv").exists(), "{code}");
+    }
+    assert!(text.contains("### Two-body impact"), "{text}");
+}

@@ -62,6 +62,7 @@ fn start(h: f64, v1: [f64; 3], v2: [f64; 3], m: f64, steps: u64, dt: f64) -> Sta
         inertia: vec![0.1 * m, 0.1 * m],
         prelude: Vec::new(),
         interlude: Vec::new(),
+        trace_steps: None,
         stages: vec![Stage {
             kind: StageKind::FixedVolume { full_time: true },
             max_strain_rate: 0.0,

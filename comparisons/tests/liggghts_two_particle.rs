@@ -68,6 +68,7 @@ fn start(zeta: f64, h0: f64, v2: [f64; 3], steps: u64, dt: f64) -> Start {
         inertia: vec![0.1, 0.1],
         prelude: Vec::new(),
         interlude: Vec::new(),
+        trace_steps: None,
         stages: vec![Stage {
             kind: StageKind::FixedVolume { full_time: false },
             max_strain_rate: 0.0,

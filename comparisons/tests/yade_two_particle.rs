@@ -106,6 +106,7 @@ fn setup() -> Setup {
         inertia: grains.iter().map(|g| 0.1 * g.2).collect(),
         prelude: Vec::new(),
         interlude: Vec::new(),
+        trace_steps: None,
         stages: vec![Stage {
             kind: StageKind::FixedVolume { full_time: true },
             max_strain_rate: 0.0,

@@ -3,6 +3,7 @@
 //! (`golden/xcode-bands.toml`).
 
 use super::code::Code;
+use crate::metrics::impact::ImpactReport;
 use crate::outcome::Outcome;
 use crate::report::format::dec4;
 use crate::report::paper;
@@ -124,6 +125,16 @@ pub struct Comparison {
     pub rows: Vec<Row>,
     /// Every check that failed, in words.
     pub failures: Vec<String>,
+    /// Two-body impacts (scenes with `output.trace_every`), per code.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub impacts: Vec<CodeImpact>,
+}
+
+/// One code's two-body impact against the analytic values (issue 19).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CodeImpact {
+    pub code: String,
+    pub report: ImpactReport,
 }
 
 /// The golden files of the default comparison scene, embedded so that a bare `grainbench` run
@@ -208,6 +219,21 @@ pub fn build(
     codes: Vec<CodeResult>,
     bands: &Bands,
 ) -> Comparison {
+    build_with(scene, n, paper_state, codes, bands, None)
+}
+
+/// [`build`] for a scene that traces a two-body impact (`impacts` given): the impact of each
+/// code that ran is checked against the analytic values instead of its final state against
+/// the equilibrium criteria (two grains apart keep their kinetic energy); a code that ran
+/// without a measurable impact fails.
+pub fn build_with(
+    scene: &str,
+    n: usize,
+    paper_state: Option<&str>,
+    codes: Vec<CodeResult>,
+    bands: &Bands,
+    impacts: Option<Vec<CodeImpact>>,
+) -> Comparison {
     let published = paper_state.and_then(paper::paper_values);
     let mut keys: Vec<String> = codes
         .iter()
@@ -275,6 +301,28 @@ pub fn build(
     }
     for c in &codes {
         match c.outcome {
+            Outcome::Ran | Outcome::Recorded if impacts.is_some() => {
+                let found = impacts.iter().flatten().find(|i| i.code == c.code.name());
+                match found {
+                    None => failures.push(format!(
+                        "{}: no impact measured in its trace (no contact, or still in contact at the end)",
+                        c.code
+                    )),
+                    Some(i) => {
+                        for k in i.report.checks().iter().filter(|k| !k.passed()) {
+                            failures.push(format!(
+                                "{}: {} = {:.6e} differs from the analytic {:.6e} by {:+.2} % (tolerance {:.2} %)",
+                                c.code,
+                                k.quantity,
+                                k.measured,
+                                k.expected,
+                                100.0 * k.deviation(),
+                                100.0 * k.tolerance
+                            ));
+                        }
+                    }
+                }
+            }
             Outcome::Ran | Outcome::Recorded => {
                 if c.status.as_deref() != Some("equilibrium") {
                     failures.push(format!(
@@ -315,6 +363,7 @@ pub fn build(
         codes,
         rows,
         failures,
+        impacts: impacts.unwrap_or_default(),
     }
 }
 
@@ -402,6 +451,9 @@ impl Comparison {
                     .unwrap_or("–".into())
             ));
         }
+        if !self.impacts.is_empty() {
+            s.push_str(&self.impact_markdown());
+        }
         for c in &self.codes {
             if !c.deviations.is_empty() {
                 s.push_str(&format!(
@@ -419,6 +471,68 @@ impl Comparison {
                 s.push_str(&format!("- {f}\n"));
             }
         }
+        s
+    }
+
+    /// The impact table: each code's measured value, its deviation from the analytic one and
+    /// from rust's (Hertz's elastic impact, the impulse balance of an impact that slides
+    /// throughout).
+    fn impact_markdown(&self) -> String {
+        let Some(first) = self.impacts.first() else {
+            return String::new();
+        };
+        let mut s = String::from(
+            "\n### Two-body impact\n\nCells: measured (Δ analytic; Δ rust). `*` marks a deviation beyond the tolerance.\n\n| quantity | analytic | tolerance |",
+        );
+        for i in &self.impacts {
+            s.push_str(&format!(" {} |", i.code));
+        }
+        s.push_str("\n| --- | --- | --- |");
+        s.push_str(&" --- |".repeat(self.impacts.len()));
+        s.push('\n');
+        let rust = self.impacts.iter().find(|i| i.code == Code::Rust.name());
+        for (q, check) in first.report.checks().iter().enumerate() {
+            s.push_str(&format!(
+                "| {} | {:.6e} | ± {:.2} % |",
+                check.quantity,
+                check.expected,
+                100.0 * check.tolerance
+            ));
+            let ours = rust.and_then(|r| r.report.checks().get(q).map(|k| k.measured));
+            for i in &self.impacts {
+                let cell = match i.report.checks().get(q) {
+                    Some(k) => {
+                        let vs_rust = ours
+                            .map(|o| format!("; {:+.3} %", 100.0 * (k.measured / o - 1.0)))
+                            .unwrap_or_default();
+                        format!(
+                            "{:.6e} ({:+.3} %{vs_rust}){}",
+                            k.measured,
+                            100.0 * k.deviation(),
+                            if k.passed() { "" } else { " *" }
+                        )
+                    }
+                    None => "–".into(),
+                };
+                s.push_str(&format!(" {cell} |"));
+            }
+            s.push('\n');
+        }
+        let m = |f: fn(&ImpactReport) -> String| {
+            self.impacts
+                .iter()
+                .map(|i| format!(" {} |", f(&i.report)))
+                .collect::<String>()
+        };
+        s.push_str(&format!(
+            "| incidence angle ° | – | – |{}\n| rebound angle ° | – | – |{}\n| e_t | – | – |{}\n",
+            m(|r| format!("{:.3}", r.measured.incidence_angle)),
+            m(|r| format!("{:.3}", r.measured.rebound_angle)),
+            m(|r| r
+                .measured
+                .restitution_tangential
+                .map_or("–".into(), |e| format!("{e:.5}"))),
+        ));
         s
     }
 

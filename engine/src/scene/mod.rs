@@ -662,12 +662,21 @@ impl Default for Criteria {
 pub struct Output {
     /// Final snapshot file name.
     pub snapshot: String,
+    /// Record every grain (and, for two grains, their impact) at least this often in
+    /// simulated time, in our engine (`run` as with `--trace-every`) and in every code's deck
+    /// (issue 19; few-body scenes of at most [`MAX_TRACE_GRAINS`] grains).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trace_every: Option<f64>,
 }
+
+/// Most grains a trace keeps (every frame is held in memory).
+pub const MAX_TRACE_GRAINS: usize = 1000;
 
 impl Default for Output {
     fn default() -> Self {
         Output {
             snapshot: "final.snap.json".into(),
+            trace_every: None,
         }
     }
 }

@@ -544,6 +544,24 @@ impl Scene {
                 ),
             ));
         }
+        if let Some(t) = self.output.trace_every {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(err(
+                    "output.trace_every",
+                    format!("must be a positive time in the scene's reduced units, got {t}"),
+                ));
+            }
+            if self.particles.count > super::MAX_TRACE_GRAINS {
+                return Err(err(
+                    "output.trace_every",
+                    format!(
+                        "a trace keeps every frame: for few-body scenes (at most {} grains), this one has {}; remove it",
+                        super::MAX_TRACE_GRAINS,
+                        self.particles.count
+                    ),
+                ));
+            }
+        }
         let name = self.output.snapshot.as_str();
         if matches!(name, "." | "..") || RESERVED_OUTPUT_NAMES.contains(&name) {
             return Err(err(

@@ -17,6 +17,8 @@ KAPPA0 = 3.9e4
 GAMMA = None
 # Generalized mass of the cell (AR07 (7)), as in grainbench.
 CELL_MASS = 4e3
+# Steps between frames of trace.txt (None: no trace).
+TRACE_EVERY = None
 # One dict per DEM stage: kind, pressure (compress), strain-rate cap (1/time),
 # time step, step limit, check period, mu, kappa, tolerances (absolute).
 STAGES = [
@@ -61,10 +63,35 @@ O.engines = [
                                            gamma=GAMMA or 0.0)],
         [Law2_ScGeom_MindlinPhys_Mindlin(includeAdhesion=GAMMA is not None)],
     ),
+    # The trace (scene output.trace_every): positions, forces of this step, velocities.
+    PyRunner(command='trace()', iterPeriod=TRACE_EVERY or 1, initRun=True,
+             dead=TRACE_EVERY is None, label='trace_runner'),
     NewtonIntegrator(damping=0.0),
     # Isotropic stress servo of the cell (AR07 (7)), active in compress stages.
     PyRunner(command='servo()', iterPeriod=1, dead=True, label='servo_runner'),
+    # The criteria every check_every steps; pauses the run when they hold (one O.run per
+    # stage: O.run(n, True) per check waits ~40 ms each, 570 s for 14168 one-step checks).
+    PyRunner(command='check()', iterPeriod=1, dead=True, label='check_runner'),
 ]
+
+TRACE = []
+
+
+def trace():
+    """One frame of trace.txt (docs/external-formats/yade.md)."""
+    if not TRACE:
+        TRACE.append(open('trace.txt', 'w'))
+        TRACE[0].write('# grainbench trace: `frame ITER TIME LX LY LZ`, then per body: '
+                       'id radius mass x y z vx vy vz wx wy wz fx fy fz\n')
+    f = TRACE[0]
+    sz = O.cell.size
+    f.write('frame %d %r %r %r %r\n' % (O.iter, O.time, sz[0], sz[1], sz[2]))
+    for b in O.bodies:
+        p, v, w = b.state.pos, b.state.vel, b.state.angVel
+        fo = O.forces.f(b.id, True)
+        vals = (b.shape.radius, b.state.mass, p[0], p[1], p[2], v[0], v[1], v[2],
+                w[0], w[1], w[2], fo[0], fo[1], fo[2])
+        f.write('%d %s\n' % (b.id, ' '.join(repr(float(x)) for x in vals)))
 
 # Cell rates L̇_α (leapfrog half-step values), as in grainbench.
 LDOT = [0.0, 0.0, 0.0]
@@ -149,6 +176,26 @@ def packing_fraction():
     return v / O.cell.volume
 
 
+CHECK = {'stage': None, 'k': 0, 'ok': False, 'last_print': 0.0}
+
+
+def check():
+    """The stage's criteria; a line at most every second (and the last); pause when met."""
+    st = CHECK['stage']
+    ok, fmax, tmax, dev, ke, sig = measures(st)
+    now = time.time()
+    if ok or now - CHECK['last_print'] >= 1.0 or O.iter + st['check_every'] > O.stopAtIter:
+        CHECK['last_print'] = now
+        print('stage %d (%s) step %d t=%.6g phi=%.6f P=%.6g F=%.3g/%.3g M=%.3g/%.3g dS=%.3g/%.3g '
+              'KE=%.3g/%.3g (rot %.2g) wall=%.1fs' % (CHECK['k'], st['kind'], O.iter + 1, O.time,
+              packing_fraction(), sum(sig) / 3.0, fmax, st['tol_force'], tmax, st['tol_moment'],
+              dev, st['tol_stress'], ke, st['tol_kinetic'], KE_PARTS[1], now - t0))
+        sys.stdout.flush()
+    if ok:
+        CHECK['ok'] = True
+        O.pause()
+
+
 statuses = []
 t0 = time.time()
 for k, st in enumerate(STAGES):
@@ -162,21 +209,14 @@ for k, st in enumerate(STAGES):
         servo_runner.dead = True
         LDOT[:] = [0.0, 0.0, 0.0]
         O.cell.velGrad = Matrix3.Zero
-    steps = 0
-    status = 'time-limit'
-    while steps < st['max_steps']:
-        n = min(st['check_every'], st['max_steps'] - steps)
-        O.run(n, True)
-        steps += n
-        ok, fmax, tmax, dev, ke, sig = measures(st)
-        print('stage %d (%s) step %d t=%.6g phi=%.6f P=%.6g F=%.3g/%.3g M=%.3g/%.3g dS=%.3g/%.3g '
-              'KE=%.3g/%.3g (rot %.2g) wall=%.1fs' % (k, st['kind'], O.iter, O.time,
-              packing_fraction(), sum(sig) / 3.0, fmax, st['tol_force'], tmax, st['tol_moment'],
-              dev, st['tol_stress'], ke, st['tol_kinetic'], KE_PARTS[1], time.time() - t0))
-        sys.stdout.flush()
-        if ok:
-            status = 'equilibrium'
-            break
+    CHECK.update(stage=st, k=k, ok=False, last_print=0.0)
+    check_runner.iterPeriod = st['check_every']
+    # Runs after step O.iter's integration: the first check sees check_every steps done.
+    check_runner.iterLast = O.iter - 1
+    check_runner.dead = False
+    O.run(st['max_steps'], True)
+    check_runner.dead = True
+    status = 'equilibrium' if CHECK['ok'] else 'time-limit'
     statuses.append(status)
 
 # Export (docs/external-formats/yade.md).
@@ -212,6 +252,9 @@ with open('final.interactions', 'w') as f:
         t = i.phys.shearForce
         f.write('%d %d %r %r %r %r %r\n' % (i.id1, i.id2, fn, fe, t[0], t[1], t[2]))
     f.write('# rows %d\n' % rows)
+if TRACE:
+    trace()  # the final state closes the series
+    TRACE[0].close()
 final = 'equilibrium' if statuses and all(s == 'equilibrium' for s in statuses) else 'time-limit'
 with open('final.status', 'w') as f:
     f.write(final + '\n')

@@ -511,6 +511,15 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         e2d = if d3 { "" } else { "fix e2d all enforce2d\n" },
         solid = num(solid),
     );
+    if let Some(k) = start.trace_steps {
+        let _ = writeln!(
+            s,
+            "\n# Trace (scene output.trace_every): every {k} steps each grain with its force\n\
+             # (docs/external-formats/lammps.md).\n\
+             dump tr all custom {k} trace.atoms id radius mass x y z vx vy vz omegax omegay omegaz fx fy fz\n\
+             dump_modify tr format float %.17g time yes"
+        );
+    }
     for (k, st) in start.stages.iter().enumerate() {
         let tol = st.tolerances;
         let k1 = k + 1;
@@ -614,6 +623,9 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
                 let _ = writeln!(s, "unfix avp{k1}");
             }
         }
+    }
+    if start.trace_steps.is_some() {
+        s.push_str("undump tr\n");
     }
     s.push_str(
         "\n# Final state (columns: docs/external-formats/lammps.md). The contacts are dumped at the\n\

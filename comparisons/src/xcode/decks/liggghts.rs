@@ -160,6 +160,16 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
          variable tsum equal 0\n\
 "
     );
+    // The trace (scene output.trace_every); the step gives the time (one time step).
+    if let Some(k) = start.trace_steps.filter(|_| start.uniform_dt().is_some()) {
+        let _ = writeln!(
+            s,
+            "# trace: every {k} steps each grain with its force (docs/external-formats/liggghts.md)\n\
+             dump tr all custom {k} trace.atoms id radius mass x y z vx vy vz omegax omegay omegaz fx fy fz\n\
+             dump_modify tr format \"%d {}\"",
+            vec!["%.17g"; 14].join(" ")
+        );
+    }
     let mut prev_mu = first.mu;
     let mut prev_kappa = first.kappa;
     for (k, st) in start.stages.iter().enumerate() {
@@ -276,6 +286,9 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
         .collect::<Vec<_>>()
         .join(" ");
     let g17 = |n: usize| vec!["%.17g"; n].join(" ");
+    if start.trace_steps.is_some() && start.uniform_dt().is_some() {
+        s.push_str("undump tr\n");
+    }
     let _ = writeln!(
         s,
         "# ---- final state\n\

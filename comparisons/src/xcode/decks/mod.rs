@@ -109,6 +109,9 @@ pub struct Start {
     /// Hard-grain stages between DEM stages (no external code can run them: refused).
     pub interlude: Vec<String>,
     pub stages: Vec<Stage>,
+    /// Steps between frames of the trace (`output.trace_every` in the first stage's time
+    /// steps, at least 1), if the scene asks for one.
+    pub trace_steps: Option<u64>,
 }
 
 /// Why a scene cannot be written for a code.
@@ -288,6 +291,11 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
         diameter: grains.diameter.clone(),
         prelude,
         interlude,
+        trace_steps: scene
+            .output
+            .trace_every
+            .zip(stages.first())
+            .map(|(t, s)| ((t / s.dt).round() as u64).max(1)),
         stages,
     })
 }
@@ -371,6 +379,12 @@ fn damping_exact(code: Code, law: &Law) -> bool {
 }
 
 impl Start {
+    /// The time step of every DEM stage, if they share one (a step count is then a time).
+    pub fn uniform_dt(&self) -> Option<f64> {
+        let dt = self.stages.first()?.dt;
+        self.stages.iter().all(|s| s.dt == dt).then_some(dt)
+    }
+
     /// What the final dumps of `code` do not say (written as `deck.json` beside the deck).
     pub fn meta(&self, code: Code) -> super::import::Meta {
         let last = self.stages.last();
@@ -396,6 +410,19 @@ impl Start {
             },
             n: self.n(),
             data: Default::default(),
+            // LIGGGHTS writes no time: its trace needs one time step throughout.
+            trace: self
+                .trace_steps
+                .filter(|_| code != Code::Liggghts || self.uniform_dt().is_some())
+                .map(|every| super::import::TraceMeta {
+                    file: match code {
+                        Code::Yade => "trace.txt",
+                        _ => "trace.atoms",
+                    }
+                    .into(),
+                    every,
+                    dt: self.uniform_dt(),
+                }),
         }
     }
 }

@@ -295,6 +295,7 @@ mod tests {
             force_unit: "P_ref a^1".into(),
             n,
             data: Default::default(),
+            trace: None,
         }
     }
 

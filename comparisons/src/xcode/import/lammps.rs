@@ -85,6 +85,7 @@ mod tests {
             force_unit: "F0".into(),
             n: 3,
             data: Default::default(),
+            trace: None,
         }
     }
 

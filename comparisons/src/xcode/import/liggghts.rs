@@ -110,6 +110,7 @@ mod tests {
             force_unit: "P_ref a^2".into(),
             n: 2,
             data: Default::default(),
+            trace: None,
         }
     }
 

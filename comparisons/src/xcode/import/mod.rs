@@ -14,6 +14,7 @@
 pub mod generic;
 pub mod lammps;
 pub mod liggghts;
+pub mod trace;
 pub mod yade;
 
 use super::code::Code;
@@ -39,6 +40,20 @@ pub struct Meta {
     /// records the data file it was written with (data files are generated, not committed).
     #[serde(default)]
     pub data: std::collections::BTreeMap<String, String>,
+    /// The trace the deck writes (scene `output.trace_every`), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trace: Option<TraceMeta>,
+}
+
+/// A deck's trace: every `every` steps, each grain with its force (`trace.rs`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TraceMeta {
+    /// File in the run directory.
+    pub file: String,
+    pub every: u64,
+    /// The time step of every stage (time = step × dt where the code writes no time).
+    pub dt: Option<f64>,
 }
 
 impl Meta {
@@ -320,13 +335,55 @@ pub fn last_dump_frame(path: &Path) -> Result<DumpSection, ImportError> {
     })?;
     // Lines numbered from 1 in the whole file, for the messages.
     let first_line = text[..start].matches('\n').count() + 1;
-    let mut lines = text[start..]
+    dump_frame(path, &text, 0, start, text.len(), first_line)
+}
+
+/// Every frame of a LAMMPS-style dump, in file order (a trace: `dump … N file` without `*`).
+pub fn dump_frames(path: &Path) -> Result<Vec<DumpSection>, ImportError> {
+    let text = std::fs::read_to_string(path).map_err(|e| ImportError::new(path, e))?;
+    let starts: Vec<usize> = text
+        .match_indices("ITEM: TIMESTEP")
+        .map(|(k, _)| k)
+        .collect();
+    if starts.is_empty() {
+        return Err(ImportError::new(
+            path,
+            "no `ITEM: TIMESTEP` line: not a LAMMPS-style dump",
+        ));
+    }
+    let (mut from, mut line, mut counted) = (0, 1, 0);
+    let mut frames = Vec::with_capacity(starts.len());
+    for (k, &start) in starts.iter().enumerate() {
+        let next = starts.get(k + 1).copied().unwrap_or(text.len());
+        // The next frame's `ITEM: TIME` (`dump_modify time yes`) precedes its TIMESTEP.
+        let end = text[start..next]
+            .rfind("ITEM: TIME\n")
+            .map_or(next, |t| start + t);
+        line += text[counted..start].matches('\n').count();
+        counted = start;
+        frames.push(dump_frame(path, &text, from, start, end, line)?);
+        from = end;
+    }
+    Ok(frames)
+}
+
+/// The frame of `text` that starts at `start` (its `ITEM: TIMESTEP`, on line `first_line`) and
+/// ends at `end`; its `ITEM: TIME`, if any, lies in `from..start`.
+fn dump_frame(
+    path: &Path,
+    text: &str,
+    from: usize,
+    start: usize,
+    end: usize,
+    first_line: usize,
+) -> Result<DumpSection, ImportError> {
+    let mut lines = text[start..end]
         .lines()
         .enumerate()
         .map(|(k, l)| (first_line + k, l));
     let mut promised: Option<(usize, usize)> = None;
     // `dump_modify time yes` writes `ITEM: TIME` and its value right before `ITEM: TIMESTEP`.
-    let time = match text[..start].rfind("ITEM: TIME\n") {
+    let time = match text[from..start].rfind("ITEM: TIME\n").map(|k| from + k) {
         Some(k) if text[k..start].lines().count() == 2 => {
             let v = text[k..start].lines().nth(1).unwrap_or("").trim();
             Some(
@@ -466,8 +523,16 @@ pub fn read_atoms(
     path: &Path,
     meta: &Meta,
 ) -> Result<(Raw, std::collections::HashMap<i64, usize>), ImportError> {
+    atoms_of(path, &last_dump_frame(path)?, meta)
+}
+
+/// The atoms of one frame of a `dump custom` (as [`read_atoms`]).
+pub fn atoms_of(
+    path: &Path,
+    sec: &DumpSection,
+    meta: &Meta,
+) -> Result<(Raw, std::collections::HashMap<i64, usize>), ImportError> {
     let d = meta.dimension;
-    let sec = last_dump_frame(path)?;
     if sec.bounds.len() < d {
         return Err(ImportError::new(path, "no box bounds in the last frame"));
     }
