@@ -90,15 +90,14 @@ pub fn sliding_throughout(
 }
 
 struct Kinematics {
-    n: Vec<f64>,
     v_n: f64,
     v_t: Vec<f64>,
 }
 
 /// Relative motion of grain 1 seen from grain 0 with the velocities of frame `s` and the
 /// line of centres of frame `at` (the first or last frame in contact: in free flight the
-/// velocities do not change, the line of centres does): the unit normal from 0 to 1 (nearest
-/// image), the approach speed along it, the tangential contact-point velocity.
+/// velocities do not change, the line of centres does): along the unit normal from 0 to 1 (nearest
+/// image), the approach speed and the tangential contact-point velocity.
 fn kinematics(s: &Snapshot, at: &Snapshot) -> Kinematics {
     let p = &s.particles;
     let d = s.dimension;
@@ -138,7 +137,6 @@ fn kinematics(s: &Snapshot, at: &Snapshot) -> Kinematics {
     Kinematics {
         v_n: -along,
         v_t: (0..d).map(|a| rel[a] - along * n[a]).collect(),
-        n,
     }
 }
 
@@ -177,7 +175,6 @@ pub fn measure(frames: &[Snapshot]) -> Option<Impact> {
             / (t_in * t_in)
     });
     let step = frames[first].time - frames[first - 1].time;
-    let _ = &after.n;
     Some(Impact {
         contact_start: frames[first].time,
         contact_end: frames[last].time,
@@ -216,28 +213,23 @@ pub struct Sliding {
 /// `measured` beside the analytic values of an undamped Hertz–Mindlin pair (`first`: a frame
 /// before the contact, for the masses and radii).
 pub fn against_theory(scene: &Scene, s: &Snapshot, measured: Impact) -> ImpactReport {
-    let Law::HertzMindlin {
-        kappa,
-        mu,
-        zeta,
-        sjkr: None,
-        dmt: None,
-        ..
-    } = &scene.law
-    else {
-        return ImpactReport {
-            measured,
-            hertz: None,
-            sliding: None,
-        };
+    let (kappa, mu) = match &scene.law {
+        Law::HertzMindlin {
+            kappa,
+            mu,
+            zeta,
+            sjkr: None,
+            dmt: None,
+            ..
+        } if *zeta == 0.0 && s.dimension == 3 => (kappa, mu),
+        _ => {
+            return ImpactReport {
+                measured,
+                hertz: None,
+                sliding: None,
+            }
+        }
     };
-    if *zeta != 0.0 || s.dimension != 3 {
-        return ImpactReport {
-            measured,
-            hertz: None,
-            sliding: None,
-        };
-    }
     let p = &s.particles;
     let (m, r) = ([p.mass[0], p.mass[1]], [p.radius[0], p.radius[1]]);
     let m_eff = m[0] * m[1] / (m[0] + m[1]);

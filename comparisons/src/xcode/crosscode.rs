@@ -3,7 +3,7 @@
 //! (`golden/xcode-bands.toml`).
 
 use super::code::Code;
-use crate::metrics::impact::ImpactReport;
+use crate::metrics::impact::{Check, ImpactReport};
 use crate::outcome::Outcome;
 use crate::report::format::dec4;
 use crate::report::paper;
@@ -478,9 +478,9 @@ impl Comparison {
     /// from rust's (Hertz's elastic impact, the impulse balance of an impact that slides
     /// throughout).
     fn impact_markdown(&self) -> String {
-        let Some(first) = self.impacts.first() else {
+        if self.impacts.is_empty() {
             return String::new();
-        };
+        }
         let mut s = String::from(
             "\n### Two-body impact\n\nCells: measured (Δ analytic; Δ rust). `*` marks a deviation beyond the tolerance.\n\n| quantity | analytic | tolerance |",
         );
@@ -490,17 +490,21 @@ impl Comparison {
         s.push_str("\n| --- | --- | --- |");
         s.push_str(&" --- |".repeat(self.impacts.len()));
         s.push('\n');
-        let rust = self.impacts.iter().find(|i| i.code == Code::Rust.name());
-        for (q, check) in first.report.checks().iter().enumerate() {
+        let checks: Vec<Vec<Check>> = self.impacts.iter().map(|i| i.report.checks()).collect();
+        let rust = self
+            .impacts
+            .iter()
+            .position(|i| i.code == Code::Rust.name());
+        for (q, check) in checks[0].iter().enumerate() {
             s.push_str(&format!(
                 "| {} | {:.6e} | ± {:.2} % |",
                 check.quantity,
                 check.expected,
                 100.0 * check.tolerance
             ));
-            let ours = rust.and_then(|r| r.report.checks().get(q).map(|k| k.measured));
-            for i in &self.impacts {
-                let cell = match i.report.checks().get(q) {
+            let ours = rust.and_then(|r| checks[r].get(q).map(|k| k.measured));
+            for code_checks in &checks {
+                let cell = match code_checks.get(q) {
                     Some(k) => {
                         let vs_rust = ours
                             .map(|o| format!("; {:+.3} %", 100.0 * (k.measured / o - 1.0)))

@@ -30,7 +30,7 @@ pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Option<Vec<Snapshot>>
         Code::Lammps | Code::Lammps2025 | Code::Liggghts => {
             let mut out = Vec::new();
             for sec in dump_frames(&path)? {
-                let (mut raw, _) = atoms_of(&path, &sec, meta)?;
+                let (mut raw, index) = atoms_of(&path, &sec, meta)?;
                 raw.time = match (sec.time, t.dt) {
                     (Some(time), _) => time,
                     (None, Some(dt)) => sec.timestep as f64 * dt,
@@ -45,13 +45,13 @@ pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Option<Vec<Snapshot>>
                     .iter()
                     .map(|c| sec.col(&path, c))
                     .collect::<Result<Vec<_>, _>>()?;
+                // In the order of `raw` (by id), as `atoms_of` put the grains.
                 let id = sec.col(&path, "id")?;
-                let mut rows: Vec<&Vec<f64>> = sec.rows.iter().collect();
-                rows.sort_by(|a, b| a[id].total_cmp(&b[id]));
-                let forces = rows
-                    .iter()
-                    .map(|r| f[..meta.dimension].iter().map(|&c| r[c]).collect())
-                    .collect();
+                let mut forces = vec![Vec::new(); sec.rows.len()];
+                for r in &sec.rows {
+                    forces[index[&(r[id].round() as i64)]] =
+                        f[..meta.dimension].iter().map(|&c| r[c]).collect();
+                }
                 out.push((raw, forces));
             }
             out
