@@ -6,6 +6,7 @@ use crate::run::{stage_file, STAGES};
 use anyhow::{Context, Result};
 use grainbench_comparisons::metrics::analyze;
 use grainbench_comparisons::metrics::consolidation::{self, ConsolidationFit, ConsolidationLaw};
+use grainbench_comparisons::report::reproduction::SeedStats;
 use grainbench_comparisons::report::{paper, plots};
 use grainbench_engine::scene::Step;
 use grainbench_engine::{snapshot, Scene, Snapshot};
@@ -128,6 +129,69 @@ impl SeedCurve {
     }
 }
 
+/// The seeds' mean loading curve and its fit by GRC08 (9): GRC08 §II.C averages "over all
+/// available samples" and T.III fits the averaged data, where one seed's fit can degenerate
+/// on the jumps of its curve.
+#[derive(Clone, Debug)]
+pub struct MeanCurve {
+    /// (P*, mean Φ, sample s.d. of Φ) at each loading pressure every seed reached.
+    pub points: Vec<(f64, f64, f64)>,
+    pub seeds: usize,
+    pub fit: Option<ConsolidationFit>,
+}
+
+impl MeanCurve {
+    /// The mean of two or more seeds' loading curves; `None` for fewer seeds.
+    pub fn of(seeds: &[SeedCurve]) -> Option<MeanCurve> {
+        if seeds.len() < 2 {
+            return None;
+        }
+        let curves: Vec<Vec<(f64, f64)>> =
+            seeds.iter().map(|s| loading_points(&s.levels)).collect();
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+        let points: Vec<(f64, f64, f64)> = curves[0]
+            .iter()
+            .filter_map(|&(p, _)| {
+                let phis: Vec<f64> = curves
+                    .iter()
+                    .filter_map(|c| c.iter().find(|q| same(q.0, p)).map(|q| q.1))
+                    .collect();
+                (phis.len() == curves.len()).then(|| {
+                    let sd = grainbench_comparisons::stats::sample_sd(&phis).unwrap_or(0.0);
+                    (p, phis.iter().sum::<f64>() / phis.len() as f64, sd)
+                })
+            })
+            .collect();
+        let xy: Vec<(f64, f64)> = points.iter().map(|&(p, phi, _)| (p, phi)).collect();
+        Some(MeanCurve {
+            fit: consolidation::fit(&xy),
+            points,
+            seeds: seeds.len(),
+        })
+    }
+
+    /// The fit's values for the reproduction table, each with its standard error where the fit
+    /// gives one (λ, α, P1*).
+    pub fn pooled(&self) -> Vec<(String, SeedStats)> {
+        let Some(f) = &self.fit else {
+            return Vec::new();
+        };
+        let se = |k: &str| match k {
+            "lambda" => Some(f.lambda_error),
+            "alpha" => Some(f.alpha_error),
+            "P1_star" => Some(f.p1_error),
+            _ => None,
+        };
+        f.values()
+            .into_iter()
+            .map(|(k, v)| {
+                let stats = SeedStats::mean_curve_fit(v, se(&k), self.seeds);
+                (k, stats)
+            })
+            .collect()
+    }
+}
+
 /// Writes `consolidation.csv` (seed, branch, P*, Φ, z, end of every level) into `out`.
 pub fn write_csv(out: &Path, seeds: &[SeedCurve]) -> Result<PathBuf> {
     let mut text = String::from("seed,branch,stage,pressure,phi,z,end\n");
@@ -162,18 +226,32 @@ pub fn paper_law(state: &str) -> Option<ConsolidationLaw> {
     })
 }
 
-/// Φ(P*) of every seed (loading and unloading levels, markers), each seed's fit by GRC08 (9)
-/// and the paper's (lines): `consolidation.svg` and `.png` in `out`.
+/// Φ(P*) of every seed (loading and unloading levels, markers), the seeds' mean with its
+/// s.d. band and its fit by GRC08 (9) when there are several seeds (each seed's fit when there
+/// is one), and the paper's (lines): `consolidation.svg` and `.png` in `out`.
 pub fn plot(
     out: &Path,
     seeds: &[SeedCurve],
+    mean: Option<&MeanCurve>,
     paper: Option<ConsolidationLaw>,
 ) -> Result<Vec<PathBuf>> {
-    // (label, points, marks) of each curve.
-    type Curve = (String, Vec<(f64, f64)>, plots::Marks);
+    // (label, points, marks, band) of each curve.
+    type Curve = (
+        String,
+        Vec<(f64, f64)>,
+        plots::Marks,
+        Option<Vec<(f64, f64, f64)>>,
+    );
     let mut owned: Vec<Curve> = Vec::new();
     let (mut p_min, mut p_max) = (f64::INFINITY, 0.0f64);
-    for SeedCurve { seed, levels, fit } in seeds {
+    let fit_label = |who: &str, f: &ConsolidationFit| {
+        format!(
+            "{who}: GRC08 (9), λ = {:.3}, Φmax = {:.4}",
+            f.law.lambda,
+            f.law.phi_max()
+        )
+    };
+    for SeedCurve { seed, levels, .. } in seeds {
         for loading in [true, false] {
             let pts: Vec<(f64, f64)> = levels
                 .iter()
@@ -186,19 +264,46 @@ pub fn plot(
             }
             if !pts.is_empty() {
                 let branch = if loading { "loading" } else { "unloading" };
-                owned.push((format!("seed {seed} {branch}"), pts, plots::Marks::Points));
+                owned.push((
+                    format!("seed {seed} {branch}"),
+                    pts,
+                    plots::Marks::Points,
+                    None,
+                ));
             }
         }
-        if let Some(f) = fit {
+    }
+    match mean {
+        Some(m) => {
+            let band = m.points.iter().map(|&(p, phi, sd)| (p, phi - sd, phi + sd));
             owned.push((
-                format!(
-                    "seed {seed}: GRC08 (9), λ = {:.3}, Φmax = {:.4}",
-                    f.law.lambda,
-                    f.law.phi_max()
-                ),
-                curve(&f.law, f.law.p0, p_max),
-                plots::Marks::Lines,
+                format!("mean of {} seeds ± s.d.", m.seeds),
+                m.points.iter().map(|&(p, phi, _)| (p, phi)).collect(),
+                plots::Marks::LinesAndPoints,
+                Some(band.collect()),
             ));
+            if let Some(f) = &m.fit {
+                let label = fit_label("mean", f);
+                owned.push((
+                    label,
+                    curve(&f.law, f.law.p0, p_max),
+                    plots::Marks::Lines,
+                    None,
+                ));
+            }
+        }
+        None => {
+            for SeedCurve { seed, fit, .. } in seeds {
+                if let Some(f) = fit {
+                    let label = fit_label(&format!("seed {seed}"), f);
+                    owned.push((
+                        label,
+                        curve(&f.law, f.law.p0, p_max),
+                        plots::Marks::Lines,
+                        None,
+                    ));
+                }
+            }
         }
     }
     if let Some(law) = paper {
@@ -211,6 +316,7 @@ pub fn plot(
                 ),
                 curve(&law, law.p0, p_max),
                 plots::Marks::Lines,
+                None,
             ));
         }
     }
@@ -219,7 +325,13 @@ pub fn plot(
     }
     let series: Vec<plots::Series> = owned
         .iter()
-        .map(|(l, p, m)| plots::Series::new(l, p).with_marks(*m))
+        .map(|(l, p, m, band)| {
+            let s = plots::Series::new(l, p).with_marks(*m);
+            match band {
+                Some(b) => s.with_band(b),
+                None => s,
+            }
+        })
         .collect();
     let mut spec = plots::LinePlot::new("Consolidation curve Φ(P*)", "P* = Pa/F0", "Φ", &series);
     spec.x_axis = plots::Axis::Log;
@@ -272,5 +384,53 @@ mod tests {
         assert_eq!(law.lambda, 0.194);
         assert!((law.phi_max() - 0.7745).abs() < 2e-3);
         assert!(paper_law("ar07-A").is_none());
+    }
+
+    #[test]
+    fn mean_curve_averages_the_common_levels_and_fits_them() {
+        let law = paper_law("grc08-consolidation-rr").expect("T.III row");
+        // The paper's program: P* = 0.01 × 10^(k/8) up to 13.33; a plateau to P0*.
+        let program: Vec<f64> = (0..=25)
+            .map(|k| 0.01 * 10f64.powf(k as f64 / 8.0))
+            .collect();
+        let seed = |id: u64, shift: f64, skip: Option<usize>| {
+            let levels = program
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| Some(*k) != skip)
+                .map(|(_, &p)| level(p, law.phi(p.max(law.p0)) + shift, true))
+                .collect();
+            SeedCurve::new(id, levels)
+        };
+        let seeds = [
+            seed(1, -0.004, None),
+            seed(2, 0.0, Some(7)),
+            seed(3, 0.004, None),
+        ];
+        let m = MeanCurve::of(&seeds).expect("three seeds");
+        assert_eq!(m.seeds, 3);
+        // The level seed 2 lacks is left out.
+        assert_eq!(m.points.len(), program.len() - 1);
+        assert!(!m.points.iter().any(|q| (q.0 - program[7]).abs() < 1e-12));
+        for &(p, phi, sd) in &m.points {
+            assert!((phi - law.phi(p.max(law.p0))).abs() < 1e-12);
+            assert!((sd - 0.004).abs() < 1e-12);
+        }
+        let f = m.fit.as_ref().expect("a fit");
+        assert!((f.law.lambda - law.lambda).abs() < 1e-3, "{f:?}");
+        assert!((f.law.phi_max() - law.phi_max()).abs() < 1e-3, "{f:?}");
+        let pooled = m.pooled();
+        let lambda = &pooled.iter().find(|(k, _)| k == "lambda").unwrap().1;
+        assert_eq!(lambda.n, 3);
+        assert!(lambda.sd.is_some());
+        assert!(pooled
+            .iter()
+            .find(|(k, _)| k == "phi0")
+            .unwrap()
+            .1
+            .sd
+            .is_none());
+        // One seed has no mean curve: its own fit is the table's.
+        assert!(MeanCurve::of(&seeds[..1]).is_none());
     }
 }

@@ -158,7 +158,10 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             curves.push(curve);
         }
     }
-    let table = reproduction::build(&state_key, &values)
+    // GRC08 T.III fits the seeds' mean curve: its parameters stand for the seeds' own fits.
+    let mean = consolidation::MeanCurve::of(&curves);
+    let pooled = mean.as_ref().map(|m| m.pooled()).unwrap_or_default();
+    let table = reproduction::build_pooled(&state_key, &values, &pooled)
         .with_context(|| format!("building the table of {state_key}"))?;
     std::fs::create_dir_all(&out)?;
     snapshot::write_atomic(&out.join("report.md"), table.to_markdown().as_bytes())?;
@@ -168,7 +171,8 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     let mut plotted = write_plots(&out, &labels, &analyses, true);
     if !curves.is_empty() {
         plotted.push(consolidation::write_csv(&out, &curves)?);
-        match consolidation::plot(&out, &curves, consolidation::paper_law(&state_key)) {
+        let paper = consolidation::paper_law(&state_key);
+        match consolidation::plot(&out, &curves, mean.as_ref(), paper) {
             Ok(files) => plotted.extend(files),
             Err(e) => eprintln!("warning: no consolidation plot: {e}"),
         }

@@ -75,6 +75,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "grc07-type2-phi036-rr-p0-v0-0p95",
     "grc07-type2-phi036-rr-p0-v0-95",
     "grc07-type2-phi036-rr-p0-v0-9p5",
+    "grc08-cycle",
     "grc08-cycle-rr",
     "grc08-cycle-rr-ci",
 );

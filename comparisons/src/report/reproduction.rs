@@ -56,6 +56,27 @@ pub struct SeedStats {
     pub sd: Option<f64>,
     /// Number of seeds that gave a finite value.
     pub n: usize,
+    /// How the value combines the seeds.
+    #[serde(default, skip_serializing_if = "Basis::is_seeds")]
+    pub basis: Basis,
+}
+
+/// How a [`SeedStats`] combines the seeds.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Basis {
+    /// Mean and sample s.d. of the seeds' values.
+    #[default]
+    Seeds,
+    /// One fit to the seeds' mean curve (GRC08 T.III: "measurements … averaged over all
+    /// available samples"); `sd` is the fit's standard error.
+    MeanCurveFit,
+}
+
+impl Basis {
+    fn is_seeds(&self) -> bool {
+        *self == Basis::Seeds
+    }
 }
 
 impl SeedStats {
@@ -66,7 +87,18 @@ impl SeedStats {
             mean: stats::mean(&v)?,
             sd: stats::sample_sd(&v),
             n: v.len(),
+            basis: Basis::Seeds,
         })
+    }
+
+    /// A value fitted to the mean curve of `n` seeds, with the fit's standard error if known.
+    pub fn mean_curve_fit(value: f64, se: Option<f64>, n: usize) -> SeedStats {
+        SeedStats {
+            mean: value,
+            sd: se.filter(|s| s.is_finite()),
+            n,
+            basis: Basis::MeanCurveFit,
+        }
     }
 }
 
@@ -213,10 +245,16 @@ impl Reproduction {
         for r in &self.rows {
             let ours = match &r.ours {
                 None => "—".to_string(),
-                Some(o) => match o.sd {
-                    Some(sd) => format!("{} ± {} (n={})", sig4(o.mean), sig4(sd), o.n),
-                    None => format!("{} (n={})", sig4(o.mean), o.n),
-                },
+                Some(o) => {
+                    let n = match o.basis {
+                        Basis::Seeds => format!("n={}", o.n),
+                        Basis::MeanCurveFit => format!("fit of the mean of n={}", o.n),
+                    };
+                    match o.sd {
+                        Some(sd) => format!("{} ± {} ({n})", sig4(o.mean), sig4(sd)),
+                        None => format!("{} ({n})", sig4(o.mean)),
+                    }
+                }
             };
             let paper = match r.paper_sd {
                 Some(sd) => format!("{} ± {}", sig4(r.paper_value), sig4(sd)),
@@ -253,6 +291,16 @@ impl Reproduction {
             SD_LIMIT,
             100.0 * REL_LIMIT
         );
+        if self.rows.iter().any(|r| {
+            r.ours
+                .as_ref()
+                .is_some_and(|o| o.basis == Basis::MeanCurveFit)
+        }) {
+            let _ = writeln!(
+                s,
+                "\"fit of the mean\": one fit to the seeds' mean curve, ± its standard error (which the Δ / our s.d. column then uses)."
+            );
+        }
         if !self.unmatched.is_empty() {
             let _ = writeln!(
                 s,
@@ -266,7 +314,7 @@ impl Reproduction {
     /// CSV with a header line; numbers in full precision, empty fields for missing values.
     pub fn to_csv(&self) -> String {
         let mut s = String::from(
-            "state,metric,ours_mean,ours_sd,ours_n,paper_value,paper_sd,ref,diff,diff_kind,diff_own_sd,verdict\n",
+            "state,metric,ours_mean,ours_sd,ours_n,ours_basis,paper_value,paper_sd,ref,diff,diff_kind,diff_own_sd,verdict\n",
         );
         let num = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
         for r in &self.rows {
@@ -276,6 +324,13 @@ impl Reproduction {
                 num(r.ours.as_ref().map(|o| o.mean)),
                 num(r.ours.as_ref().and_then(|o| o.sd)),
                 r.ours.as_ref().map_or(String::new(), |o| o.n.to_string()),
+                r.ours.as_ref().map_or(String::new(), |o| {
+                    match o.basis {
+                        Basis::Seeds => "seeds",
+                        Basis::MeanCurveFit => "mean_curve_fit",
+                    }
+                    .to_string()
+                }),
                 r.paper_value.to_string(),
                 num(r.paper_sd),
                 csv_field(&r.reference),
@@ -305,9 +360,25 @@ impl Reproduction {
 ///
 /// Non-finite values are skipped (a seed that gives NaN for a metric does not count for it).
 pub fn build(state: &str, seeds: &[Vec<(String, f64)>]) -> Result<Reproduction, ReproductionError> {
+    build_pooled(state, seeds, &[])
+}
+
+/// As [`build`], with `pooled` values standing for the seeds' in their metrics' rows (the fit
+/// of the seeds' mean curve, [`SeedStats::mean_curve_fit`]).
+pub fn build_pooled(
+    state: &str,
+    seeds: &[Vec<(String, f64)>],
+    pooled: &[(String, SeedStats)],
+) -> Result<Reproduction, ReproductionError> {
     let published =
         paper::paper_values(state).ok_or_else(|| ReproductionError::UnknownState(state.into()))?;
-    build_against(state, published, seeds)
+    let mut table = build_against(state, published, seeds)?;
+    for (metric, ours) in pooled {
+        if let Some(row) = table.rows.iter_mut().find(|r| &r.metric == metric) {
+            *row = Row::compare(metric, Some(ours.clone()), &published.values[metric]);
+        }
+    }
+    Ok(table)
 }
 
 /// As [`build`], against an explicit set of published values (e.g. parsed from another file).
@@ -546,14 +617,14 @@ x0 = { value = 0.10, sd = 0.004, ref = "AR07 T.IV, note" }
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 1 + r.rows.len());
         assert!(lines[0].starts_with("state,metric,ours_mean"));
-        assert!(lines.iter().all(|l| l.split(',').count() >= 12));
+        assert!(lines.iter().all(|l| l.split(',').count() >= 13));
         let x0 = lines.iter().find(|l| l.starts_with("t,x0,")).unwrap();
         assert!(x0.contains(",\"AR07 T.IV, note\","), "quoted ref: {x0}");
         assert!(
             x0.ends_with(",paper_sd,,ok"),
             "zero spread leaves diff_own_sd empty: {x0}"
         );
-        assert!(csv.contains("t,Z2,,,,1.5,,AR07 T.IV,,relative,,n/a"));
+        assert!(csv.contains("t,Z2,,,,,1.5,,AR07 T.IV,,relative,,n/a"));
 
         let json: serde_json::Value = serde_json::from_str(&r.to_json()).unwrap();
         assert_eq!(json["state"], "t");
@@ -574,5 +645,45 @@ x0 = { value = 0.10, sd = 0.004, ref = "AR07 T.IV, note" }
             };
             assert!(close(b.diff, o.diff) && close(b.diff_own_sd, o.diff_own_sd));
         }
+    }
+
+    #[test]
+    fn pooled_values_replace_the_seed_statistics_of_their_rows() {
+        // GRC08 T.III's λ = 0.194 ± 0.004: the seeds scatter (0.26 ± 0.12, a miss) while one
+        // fit to their mean curve lands within the band.
+        let input = seeds(&[
+            &[("lambda", 0.188), ("phi_at_pmax", 0.779)],
+            &[("lambda", 0.185), ("phi_at_pmax", 0.776)],
+            &[("lambda", 0.40), ("phi_at_pmax", 0.776)],
+        ]);
+        let state = "grc08-consolidation-rr";
+        let plain = build(state, &input).unwrap();
+        let row = |r: &Reproduction, m: &str| r.rows.iter().find(|x| x.metric == m).cloned();
+        assert_eq!(row(&plain, "lambda").unwrap().verdict, Verdict::Miss);
+        let pooled = [(
+            "lambda".to_string(),
+            SeedStats::mean_curve_fit(0.196, Some(0.003), 3),
+        )];
+        let r = build_pooled(state, &input, &pooled).unwrap();
+        let lambda = row(&r, "lambda").unwrap();
+        assert_eq!(lambda.verdict, Verdict::Ok);
+        assert_eq!(lambda.ours.as_ref().unwrap().basis, Basis::MeanCurveFit);
+        assert!((lambda.diff_own_sd.unwrap() - 0.002 / 0.003).abs() < 1e-9);
+        // Other rows keep the seeds' statistics.
+        assert_eq!(row(&r, "phi_at_pmax"), row(&plain, "phi_at_pmax"));
+        let md = r.to_markdown();
+        assert!(
+            md.contains("| lambda | 0.196 ± 0.003 (fit of the mean of n=3) |"),
+            "{md}"
+        );
+        assert!(md.contains("one fit to the seeds' mean curve"), "{md}");
+        assert!(r.to_csv().contains(",lambda,0.196,0.003,3,mean_curve_fit,"));
+        let back: Reproduction = serde_json::from_str(&r.to_json()).unwrap();
+        assert_eq!(
+            row(&back, "lambda").unwrap().ours.unwrap().basis,
+            Basis::MeanCurveFit
+        );
+        // A seeds' row serializes without the field (records written before it read alike).
+        assert!(!plain.to_json().contains("basis"));
     }
 }
