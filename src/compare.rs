@@ -135,7 +135,7 @@ fn write_outputs(
     )?;
     let labels: Vec<String> = analyses.iter().map(|(c, _)| c.clone()).collect();
     let analyses: Vec<Analysis> = analyses.into_iter().map(|(_, a)| a).collect();
-    let plots = crate::reproduce::write_plots(out, &labels, &analyses, false);
+    let plots = crate::reproduce::write_plots(out, &labels, &analyses, false, None);
     let svgs: Vec<PathBuf> = plots
         .into_iter()
         .filter(|p| p.extension().is_some_and(|e| e == "svg"))

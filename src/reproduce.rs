@@ -5,8 +5,11 @@
 use crate::consolidation;
 use crate::run::{run, RunFlags, CHECKPOINT};
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::metrics::{analyze, Analysis};
-use grainbench_comparisons::report::{paper, plots, reproduction};
+use grainbench_comparisons::metrics::density_field::Scattering;
+use grainbench_comparisons::metrics::fractal_fit::FractalFit;
+use grainbench_comparisons::metrics::{analyze, density, Analysis};
+use grainbench_comparisons::report::reproduction::{self, SeedStats};
+use grainbench_comparisons::report::{paper, plots};
 use grainbench_engine::{library, snapshot, Snapshot};
 use std::path::{Path, PathBuf};
 
@@ -158,9 +161,25 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             curves.push(curve);
         }
     }
-    // GRC08 T.III fits the seeds' mean curve: its parameters stand for the seeds' own fits.
+    // GRC08 T.III fits the seeds' mean curve and GRC07 §V.D their mean I(k): those fits'
+    // parameters stand for the seeds' own.
     let mean = consolidation::MeanCurve::of(&curves);
-    let pooled = mean.as_ref().map(|m| m.pooled()).unwrap_or_default();
+    let mut pooled = mean.as_ref().map(|m| m.pooled()).unwrap_or_default();
+    let densities: Vec<_> = analyses.iter().filter_map(|a| a.density.as_ref()).collect();
+    let mean_ik = (densities.len() == analyses.len())
+        .then(|| density::mean_scattering(&densities))
+        .flatten();
+    if let Some(f) = mean_ik.as_ref().and_then(|m| m.fit.as_ref()) {
+        let n = densities.len();
+        pooled.push((
+            "d_F".into(),
+            SeedStats::mean_curve_fit(f.model.d_f, Some(f.d_f_error), n),
+        ));
+        pooled.push((
+            "xi".into(),
+            SeedStats::mean_curve_fit(f.model.xi, Some(f.xi_error), n),
+        ));
+    }
     let table = reproduction::build_pooled(&state_key, &values, &pooled)
         .with_context(|| format!("building the table of {state_key}"))?;
     std::fs::create_dir_all(&out)?;
@@ -168,7 +187,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     snapshot::write_atomic(&out.join("report.csv"), table.to_csv().as_bytes())?;
     snapshot::write_atomic(&out.join("report.json"), table.to_json().as_bytes())?;
     let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
-    let mut plotted = write_plots(&out, &labels, &analyses, true);
+    let mut plotted = write_plots(&out, &labels, &analyses, true, mean_ik.as_ref());
     if !curves.is_empty() {
         plotted.push(consolidation::write_csv(&out, &curves)?);
         let paper = consolidation::paper_law(&state_key);
@@ -259,12 +278,14 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
 /// for cohesionless frictionless sphere packings (AR07 Fig. 4); I(k) with its GRC07 (28) fit
 /// for 2D cohesive packings. Returns the files written.
 /// With `seeds` (the analyses are seeds of one state), P(f) is their mean over the band of
-/// their spread.
+/// their spread; with `mean_ik` (their mean I(k), [`density::mean_scattering`]) the I(k) plot
+/// shows it over its standard-error band with its fit, in place of each seed's fit.
 pub(crate) fn write_plots(
     out: &Path,
     labels: &[String],
     analyses: &[Analysis],
     seeds: bool,
+    mean_ik: Option<&density::MeanScattering>,
 ) -> Vec<PathBuf> {
     let mut written = Vec::new();
     let pf: Vec<Vec<(f64, f64)>> = analyses
@@ -301,34 +322,60 @@ pub(crate) fn write_plots(
         Ok(f) => written.extend([f.svg, f.png]),
         Err(e) => eprintln!("warning: no g(r) plot: {e}"),
     }
-    // GRC07 Fig. 23: I(k) of each seed and its fit by GRC07 (28), 2D cohesive packings.
-    let mut ik: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    // GRC07 Fig. 23: I(k) of each seed and its fit by GRC07 (28), 2D cohesive packings; over
+    // seeds, their mean and its fit.
+    type Curve = (String, Vec<(f64, f64)>, Option<Vec<(f64, f64, f64)>>);
+    let mut ik: Vec<Curve> = Vec::new();
+    let fit_curve = |who: &str, f: &FractalFit| -> Curve {
+        let curve = (0..=60)
+            .map(|q| f.k_min * (f.k_max / f.k_min).powf(q as f64 / 60.0))
+            .map(|k| (k, f.model.eval(k)))
+            .collect();
+        let label = format!(
+            "{who}: GRC07 (28), d_F = {:.2}, ξ = {:.2} a",
+            f.model.d_f, f.model.xi
+        );
+        (label, curve, None)
+    };
+    let pairs = |s: &Scattering| -> Vec<(f64, f64)> {
+        s.k.iter()
+            .copied()
+            .zip(s.intensity.iter().copied())
+            .collect()
+    };
     for (a, l) in analyses.iter().zip(labels) {
         let Some(d) = &a.density else { continue };
-        let s = &d.scattering;
-        ik.push((
-            l.clone(),
-            s.k.iter()
-                .copied()
-                .zip(s.intensity.iter().copied())
-                .collect(),
-        ));
-        if let Some(f) = &d.fit {
-            let curve = (0..=60)
-                .map(|q| f.k_min * (f.k_max / f.k_min).powf(q as f64 / 60.0))
-                .map(|k| (k, f.model.eval(k)))
-                .collect();
-            ik.push((
-                format!(
-                    "{l}: GRC07 (28), d_F = {:.2}, ξ = {:.2} a",
-                    f.model.d_f, f.model.xi
-                ),
-                curve,
-            ));
+        ik.push((l.clone(), pairs(&d.scattering), None));
+        if let (None, Some(f)) = (mean_ik, &d.fit) {
+            ik.push(fit_curve(l, f));
+        }
+    }
+    if let Some(m) = mean_ik {
+        let s = &m.scattering;
+        let band = (0..s.k.len())
+            .map(|q| {
+                (
+                    s.k[q],
+                    s.intensity[q] - s.error[q],
+                    s.intensity[q] + s.error[q],
+                )
+            })
+            .filter(|b| b.1 > 0.0)
+            .collect();
+        let label = format!("mean of {} seeds ± s.e.", m.samples);
+        ik.push((label, pairs(s), Some(band)));
+        if let Some(f) = &m.fit {
+            ik.push(fit_curve("mean", f));
         }
     }
     if !ik.is_empty() {
-        let s: Vec<plots::Series> = ik.iter().map(|(l, p)| plots::Series::new(l, p)).collect();
+        let s: Vec<plots::Series> = ik
+            .iter()
+            .map(|(l, p, band)| match band {
+                Some(b) => plots::Series::new(l, p).with_band(b),
+                None => plots::Series::new(l, p),
+            })
+            .collect();
         let mut plot = plots::LinePlot::new("Scattering function I(k)", "k a", "I(k) / a²", &s);
         plot.x_axis = plots::Axis::Log;
         plot.y_axis = plots::Axis::Log;
