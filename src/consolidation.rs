@@ -21,10 +21,36 @@ pub struct Level {
     /// Reduced pressure P* of the level.
     pub pressure: f64,
     pub phi: f64,
-    /// Coordination number of the stage-end state (`None` without its snapshot).
-    pub z: Option<f64>,
+    /// Coordination of the stage-end state (`None` without its snapshot).
+    pub z: Option<Coordination>,
     /// How the stage ended (`equilibrium`, `time-limit`, …).
     pub end: String,
+}
+
+/// Coordination number of a level's state and its parts by the sign of the normal force,
+/// GRC08 Fig. 17: z = z+ (compressive) + z− (tensile) + z0 (no force).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coordination {
+    pub z: f64,
+    pub z_plus: f64,
+    pub z_minus: f64,
+    pub z_zero: f64,
+}
+
+impl Coordination {
+    fn of(values: &[(String, f64)]) -> Option<Coordination> {
+        let get = |k: &str| values.iter().find(|(key, _)| key == k).map(|(_, v)| *v);
+        Some(Coordination {
+            z: get("z")?,
+            z_plus: get("z_plus")?,
+            z_minus: get("z_minus")?,
+            z_zero: get("z_zero")?,
+        })
+    }
+
+    fn parts(&self) -> [f64; 4] {
+        [self.z, self.z_plus, self.z_minus, self.z_zero]
+    }
 }
 
 /// Whether a scene runs pressure programs (GRC08 §II.D.2 cycles).
@@ -56,11 +82,7 @@ pub fn levels(scene: &Scene, steps: &serde_json::Value, dir: &Path) -> Result<Ve
         let path = dir.join(STAGES).join(stage_file(stage));
         let z = if path.exists() {
             let snap = Snapshot::read(&path)?;
-            analyze(&snap, &Default::default())
-                .metric_values()
-                .into_iter()
-                .find(|(key, _)| key == "z")
-                .map(|(_, v)| v)
+            Coordination::of(&analyze(&snap, &Default::default()).metric_values())
         } else {
             None
         };
@@ -192,18 +214,22 @@ impl MeanCurve {
     }
 }
 
-/// Writes `consolidation.csv` (seed, branch, P*, Φ, z, end of every level) into `out`.
+/// Writes `consolidation.csv` (seed, branch, P*, Φ, z, z+, z−, z0, end of every level) into
+/// `out`.
 pub fn write_csv(out: &Path, seeds: &[SeedCurve]) -> Result<PathBuf> {
-    let mut text = String::from("seed,branch,stage,pressure,phi,z,end\n");
+    let mut text = String::from("seed,branch,stage,pressure,phi,z,z_plus,z_minus,z_zero,end\n");
     for SeedCurve { seed, levels, .. } in seeds {
         for l in levels {
+            let z = match l.z {
+                Some(c) => c.parts().map(|x| x.to_string()).join(","),
+                None => ",,,".to_string(),
+            };
             text.push_str(&format!(
-                "{seed},{},{},{},{},{},{}\n",
+                "{seed},{},{},{},{},{z},{}\n",
                 if l.loading { "loading" } else { "unloading" },
                 l.stage,
                 l.pressure,
                 l.phi,
-                l.z.map(|z| z.to_string()).unwrap_or_default(),
                 l.end
             ));
         }
@@ -338,6 +364,77 @@ pub fn plot(
     spec.x_range = Some((p_min * 0.8, p_max * 1.25));
     spec.legend_lower_right = true;
     let files = plots::line_plot(&out.join("consolidation"), &spec)?;
+    Ok(vec![files.svg, files.png])
+}
+
+/// GRC08 Fig. 17: z, z+, z− and z0 along the cycle, averaged over the seeds at each level
+/// every seed reached with its state (lines on loading, markers on unloading):
+/// `consolidation-z.svg` and `.png` in `out`; nothing without the levels' states.
+pub fn plot_coordination(out: &Path, seeds: &[SeedCurve]) -> Result<Vec<PathBuf>> {
+    const NAMES: [&str; 4] = ["z", "z+ (compressive)", "z− (tensile)", "z0 (no force)"];
+    // (label, points, marks) of each curve.
+    type Curve = (String, Vec<(f64, f64)>, plots::Marks);
+    let mut owned: Vec<Curve> = Vec::new();
+    for loading in [true, false] {
+        let branch: Vec<Vec<&Level>> = seeds
+            .iter()
+            .map(|s| {
+                s.levels
+                    .iter()
+                    .filter(|l| l.loading == loading && l.z.is_some())
+                    .collect()
+            })
+            .collect();
+        let Some(first) = branch.first() else {
+            continue;
+        };
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+        let mut means: [Vec<(f64, f64)>; 4] = Default::default();
+        for l in first {
+            let at: Vec<Coordination> = branch
+                .iter()
+                .filter_map(|b| b.iter().find(|m| same(m.pressure, l.pressure)))
+                .filter_map(|m| m.z)
+                .collect();
+            if at.len() < branch.len() {
+                continue;
+            }
+            for (q, mean) in means.iter_mut().enumerate() {
+                let v = at.iter().map(|c| c.parts()[q]).sum::<f64>() / at.len() as f64;
+                mean.push((l.pressure, v));
+            }
+        }
+        let (name, marks) = if loading {
+            ("loading", plots::Marks::LinesAndPoints)
+        } else {
+            ("unloading", plots::Marks::Points)
+        };
+        for (label, pts) in NAMES.iter().zip(means) {
+            if !pts.is_empty() {
+                owned.push((format!("{label}, {name}"), pts, marks));
+            }
+        }
+    }
+    if owned.is_empty() {
+        return Ok(Vec::new());
+    }
+    let series: Vec<plots::Series> = owned
+        .iter()
+        .map(|(l, p, m)| plots::Series::new(l, p).with_marks(*m))
+        .collect();
+    let title = match seeds.len() {
+        1 => "Coordination along the cycle".to_string(),
+        n => format!("Coordination along the cycle (mean of {n} seeds)"),
+    };
+    let top = owned
+        .iter()
+        .flat_map(|(_, p, _)| p.iter().map(|q| q.1))
+        .fold(0.0, f64::max);
+    let mut spec = plots::LinePlot::new(&title, "P* = Pa/F0", "interactions per grain", &series);
+    spec.x_axis = plots::Axis::Log;
+    // Room above the curves for the legend.
+    spec.y_range = Some((0.0, 1.75 * top));
+    let files = plots::line_plot(&out.join("consolidation-z"), &spec)?;
     Ok(vec![files.svg, files.png])
 }
 

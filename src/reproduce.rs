@@ -195,6 +195,10 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             Ok(files) => plotted.extend(files),
             Err(e) => eprintln!("warning: no consolidation plot: {e}"),
         }
+        match consolidation::plot_coordination(&out, &curves) {
+            Ok(files) => plotted.extend(files),
+            Err(e) => eprintln!("warning: no coordination plot: {e}"),
+        }
     }
     let svgs: Vec<PathBuf> = plotted
         .iter()
@@ -234,6 +238,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             "gr.svg",
             "ik.svg",
             "consolidation.svg",
+            "consolidation-z.svg",
             "consolidation.csv",
         ] {
             let (from, to) = (out.join(f), path.with_file_name(f));

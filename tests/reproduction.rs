@@ -198,9 +198,15 @@ fn grc08_cycle_ci_consolidates_in_its_bands() {
     let (loading, unloading): (Vec<_>, Vec<_>) = rows.iter().partition(|r| r[1] == "loading");
     assert_eq!((loading.len(), unloading.len()), (14, 14), "{csv}");
     for r in &rows {
-        assert_eq!(r[6], "equilibrium", "{csv}");
+        assert_eq!(r[9], "equilibrium", "{csv}");
         assert!(num(r, 5) > 2.0, "z of every level: {csv}");
+        // GRC08 Fig. 17: compressive and tensile contacts both present at every level.
+        assert!(
+            num(r, 6) > 0.5 && num(r, 7) > 0.1,
+            "z+ and z− of every level: {csv}"
+        );
     }
+    assert!(dir.path().join("consolidation-z.svg").exists());
     for w in loading.windows(2) {
         assert!(num(w[0], 3) < num(w[1], 3), "{csv}");
         assert!(
