@@ -11,9 +11,11 @@ use anyhow::{bail, Context, Result};
 use grainbench_comparisons::metrics::impact::ImpactReport;
 use grainbench_comparisons::metrics::Analysis;
 use grainbench_comparisons::outcome::Outcome;
+use grainbench_comparisons::report::plots;
 use grainbench_comparisons::xcode::crosscode::{self, Bands, CodeImpact, CodeResult, Comparison};
 use grainbench_comparisons::xcode::decks::{self, Code, StageKind, Start};
 use grainbench_comparisons::xcode::import::{self, Meta};
+use grainbench_comparisons::xcode::seeds;
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -22,6 +24,8 @@ use std::time::Instant;
 pub struct Args {
     pub scene: String,
     pub codes: Vec<String>,
+    /// Seeds to compare (empty: the scene's).
+    pub seeds: Vec<u64>,
     pub out: Option<PathBuf>,
     pub time_limit: f64,
     pub np: Option<usize>,
@@ -42,12 +46,139 @@ pub fn compare(a: &Args) -> Result<i32> {
     if a.time_limit.is_nan() || a.time_limit <= 0.0 {
         bail!("--time-limit must be a positive number of seconds");
     }
+    let seeds = &a.seeds;
+    if let Some((_, s)) = seeds
+        .iter()
+        .enumerate()
+        .find(|(i, s)| seeds[..*i].contains(s))
+    {
+        bail!("--seeds lists seed {s} twice");
+    }
     let out = a
         .out
         .clone()
         .unwrap_or_else(|| Path::new("runs/compare").join(&scene.name));
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let start = Start::of(&scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
+    if seeds.len() <= 1 {
+        let mut scene = scene;
+        if let Some(&s) = seeds.first() {
+            scene.seed = s;
+        }
+        let (cmp, analyses) = compare_one(a, &scene, &codes, &out)?;
+        write_outputs(&out, &cmp, analyses, a.all_metrics)?;
+        return Ok(if cmp.failures.is_empty() { 0 } else { 1 });
+    }
+    // Several seeds: each compared on its own, then every code over its seeds.
+    let mut runs = Vec::new();
+    let mut per_code: Vec<(String, Vec<Analysis>)> = Vec::new();
+    for (k, &seed) in seeds.iter().enumerate() {
+        if STOP.load(Ordering::SeqCst) {
+            break;
+        }
+        let mut scene = scene.clone();
+        scene.seed = seed;
+        let dir = out.join(format!("seed-{seed}"));
+        eprintln!(
+            "seed {seed} ({} of {}) → {}",
+            k + 1,
+            seeds.len(),
+            dir.display()
+        );
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        let (cmp, analyses) = compare_one(a, &scene, &codes, &dir)?;
+        for (code, analysis) in &analyses {
+            match per_code.iter_mut().find(|(c, _)| c == code) {
+                Some((_, list)) => list.push(analysis.clone()),
+                None => per_code.push((code.clone(), vec![analysis.clone()])),
+            }
+        }
+        write_outputs(&dir, &cmp, analyses, a.all_metrics)?;
+        runs.push((seed, cmp));
+    }
+    let summary = seeds::over_seeds(&runs);
+    println!("{}", summary.to_markdown(a.all_metrics));
+    write_atomic(
+        &out.join("compare-seeds.md"),
+        summary.to_markdown(true).as_bytes(),
+    )?;
+    write_atomic(&out.join("compare-seeds.csv"), summary.to_csv().as_bytes())?;
+    write_atomic(
+        &out.join("compare-seeds.json"),
+        (serde_json::to_string_pretty(&summary)? + "\n").as_bytes(),
+    )?;
+    let svgs = seed_band_plots(&out, &per_code);
+    grainbench_comparisons::report::html::write(
+        &out,
+        &format!("grainbench compare {} --seeds {}", scene.name, join(seeds)),
+        &summary.to_markdown(true),
+        &svgs,
+    )?;
+    eprintln!(
+        "wrote {0}/compare-seeds.md, compare-seeds.csv, compare-seeds.json, report.html, pf.svg/png; each seed in {0}/seed-K/{1}",
+        out.display(),
+        if summary.failures.is_empty() {
+            String::new()
+        } else {
+            format!("; {} check(s) failed", summary.failures.len())
+        }
+    );
+    if runs.len() < seeds.len() {
+        eprintln!("interrupted after {} of {} seeds", runs.len(), seeds.len());
+        return Ok(130);
+    }
+    Ok(if summary.failures.is_empty() { 0 } else { 1 })
+}
+
+fn join(seeds: &[u64]) -> String {
+    seeds
+        .iter()
+        .map(|s| s.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// P(f) of every code as the mean of its seeds over the band of their spread (`pf.svg/png`).
+fn seed_band_plots(out: &Path, per_code: &[(String, Vec<Analysis>)]) -> Vec<PathBuf> {
+    let bands: Vec<(String, plots::SeedBand)> = per_code
+        .iter()
+        .filter_map(|(code, list)| {
+            let pf: Vec<Vec<(f64, f64)>> = list
+                .iter()
+                .filter_map(|a| a.forces.pdf.as_ref())
+                .map(|h| h.x.iter().copied().zip(h.y.iter().copied()).collect())
+                .collect();
+            let label = format!("{code} (mean of {} seeds, band: their spread)", pf.len());
+            Some((label, plots::seed_band(&pf)?))
+        })
+        .collect();
+    let series: Vec<plots::Series> = bands
+        .iter()
+        .map(|(l, b)| plots::Series::new(l, &b.mean).with_band(&b.band))
+        .collect();
+    let first = per_code.first().and_then(|(_, l)| l.first());
+    let cohesive = first.is_some_and(|a| a.cohesive);
+    let frictionless_spheres =
+        first.is_some_and(|a| a.dimension == 3 && a.mu == Some(0.0) && !a.cohesive);
+    if series.is_empty() {
+        return Vec::new();
+    }
+    match plots::force_distribution(&out.join("pf"), &series, frictionless_spheres, cohesive) {
+        Ok(f) => vec![f.svg],
+        Err(e) => {
+            eprintln!("warning: no P(f) plot: {e}");
+            Vec::new()
+        }
+    }
+}
+
+/// One seed: every code run from the scene's start, measured and compared.
+fn compare_one(
+    a: &Args,
+    scene: &grainbench_engine::Scene,
+    codes: &[Code],
+    out: &Path,
+) -> Result<(Comparison, Vec<(String, Analysis)>)> {
+    let start = Start::of(scene).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
     let (p_target, p_tol) = match start.stages.last() {
         Some(s) => match s.kind {
             StageKind::Compress { pressure } => (Some(pressure), Some(s.tolerances.stress)),
@@ -56,17 +187,18 @@ pub fn compare(a: &Args) -> Result<i32> {
         None => (None, None),
     };
     eprintln!(
-        "compare {} (N = {}): {} → {}",
+        "compare {} (N = {}, seed {}): {} → {}",
         scene.name,
         start.n(),
-        xcode::code_names(&codes),
+        scene.seed,
+        xcode::code_names(codes),
         out.display()
     );
     let mut results = Vec::new();
     let mut analyses: Vec<(String, Analysis)> = Vec::new();
     // A traced two-body scene is an impact test in every code.
     let mut impacts = (scene.output.trace_every.is_some() && start.n() == 2).then(Vec::new);
-    for &code in &codes {
+    for &code in codes {
         if STOP.load(Ordering::SeqCst) {
             break;
         }
@@ -78,11 +210,11 @@ pub fn compare(a: &Args) -> Result<i32> {
             ..CodeResult::new(code, Outcome::Ran)
         };
         let snap = match code {
-            Code::Rust => run_rust(&scene, &dir, a.quiet, &mut r)?,
+            Code::Rust => run_rust(scene, &dir, a.quiet, &mut r)?,
             _ => external::run(&start, code, &dir, a.time_limit, a.np, a.quiet, &mut r)?,
         };
         if let (Some(snap), Some(list)) = (&snap, impacts.as_mut()) {
-            if let Some(report) = impact_of(code, &dir, &scene, snap)? {
+            if let Some(report) = impact_of(code, &dir, scene, snap)? {
                 list.push(CodeImpact {
                     code: code.name().into(),
                     report,
@@ -90,7 +222,7 @@ pub fn compare(a: &Args) -> Result<i32> {
             }
         }
         if let Some(snap) = snap {
-            let analysis = analysis_with_moduli(&snap, &scene);
+            let analysis = analysis_with_moduli(&snap, scene);
             r.metrics = analysis.metric_values().into_iter().collect();
             r.status = Some(snap.status.clone());
             analyses.push((code.name().to_string(), analysis));
@@ -115,8 +247,7 @@ pub fn compare(a: &Args) -> Result<i32> {
         &Bands::embedded(),
         impacts,
     );
-    write_outputs(&out, &cmp, analyses, a.all_metrics)?;
-    Ok(if cmp.failures.is_empty() { 0 } else { 1 })
+    Ok((cmp, analyses))
 }
 
 fn write_outputs(

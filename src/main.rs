@@ -176,6 +176,11 @@ enum Command {
         /// (docs/exchange-format.md).
         #[arg(long, value_delimiter = ',')]
         codes: Vec<String>,
+        /// Seeds, comma-separated (default: the scene's). With several, each seed is compared
+        /// in `seed-K/` and `compare-seeds.md` gives every code's mean ± s.d., with P(f) per
+        /// code over its seeds' band.
+        #[arg(long, value_delimiter = ',')]
+        seeds: Vec<u64>,
         /// Output directory (default: `runs/compare/<scene>`).
         #[arg(long, short)]
         out: Option<PathBuf>,
@@ -293,6 +298,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
     match cli.command.unwrap_or(Command::Compare {
         scene: DEFAULT_COMPARE.into(),
         codes: Vec::new(),
+        seeds: Vec::new(),
         out: None,
         time_limit: 3600.0,
         np: None,
@@ -303,6 +309,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
         Command::Compare {
             scene,
             codes,
+            seeds,
             out,
             time_limit,
             np,
@@ -315,6 +322,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             compare::compare(&compare::Args {
                 scene,
                 codes,
+                seeds,
                 out,
                 time_limit,
                 np,

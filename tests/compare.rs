@@ -433,3 +433,94 @@ fn damaged_external_dumps_are_refused() {
         .stderr(predicates::str::contains("final.interactions"))
         .stderr(predicates::str::contains("cut short"));
 }
+
+/// `--seeds`: each seed compared in its own directory from its own start, then every code's
+/// mean ± s.d. over them with P(f) over the band of their spread.
+#[test]
+fn several_seeds_give_each_code_its_mean_and_spread() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path());
+    let out = dir.path().join("cmp");
+    let assert = Command::cargo_bin("grainbench")
+        .unwrap()
+        .args(["compare"])
+        .arg(&scene)
+        .args(["--codes", "rust", "--seeds", "3,5", "-q", "-j", "1", "-o"])
+        .arg(&out)
+        .assert();
+    // The 20-T0 tiny scene may stop short of equilibrium: a failed check, prefixed by its seed.
+    let code = assert.get_output().status.code();
+    assert!(matches!(code, Some(0 | 1)), "{code:?}");
+    let stdout = String::from_utf8_lossy(&assert.get_output().stdout);
+    assert!(
+        stdout.contains("## tiny over seeds 3, 5 (N = 32)"),
+        "{stdout}"
+    );
+    let phi_of = |seed: u64| -> f64 {
+        let cmp: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(out.join(format!("seed-{seed}/compare.json"))).unwrap(),
+        )
+        .unwrap();
+        cmp["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["metric"] == "phi")
+            .unwrap()["values"]["rust"]
+            .as_f64()
+            .unwrap()
+    };
+    let (a, b) = (phi_of(3), phi_of(5));
+    assert_ne!(a, b, "two seeds, two packings");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("compare-seeds.json")).unwrap()).unwrap();
+    assert_eq!(summary["seeds"], serde_json::json!([3, 5]));
+    let failures = summary["failures"].as_array().unwrap();
+    assert_eq!(failures.is_empty(), code == Some(0));
+    assert!(failures
+        .iter()
+        .all(|f| f.as_str().unwrap().starts_with("seed 3: ")
+            || f.as_str().unwrap().starts_with("seed 5: ")));
+    let phi = summary["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["metric"] == "phi")
+        .unwrap()["codes"]["rust"]
+        .clone();
+    assert_eq!(phi["n"], 2);
+    assert!((phi["mean"].as_f64().unwrap() - (a + b) / 2.0).abs() < 1e-12);
+    assert!((phi["sd"].as_f64().unwrap() - (a - b).abs() / 2f64.sqrt()).abs() < 1e-12);
+    for f in [
+        "compare-seeds.md",
+        "compare-seeds.csv",
+        "pf.svg",
+        "report.html",
+        "seed-3/compare.md",
+        "seed-5/pf.svg",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let svg = std::fs::read_to_string(out.join("pf.svg")).unwrap();
+    assert!(
+        svg.contains("rust (mean of 2 seeds"),
+        "P(f) over the seeds' band"
+    );
+}
+
+#[test]
+fn a_seed_listed_twice_is_refused() {
+    Command::cargo_bin("grainbench")
+        .unwrap()
+        .args([
+            "compare",
+            "xcode-smoke",
+            "--codes",
+            "rust",
+            "--seeds",
+            "1,2,1",
+        ])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--seeds lists seed 1 twice"));
+}

@@ -7,6 +7,7 @@
 //!   `deck.json` metadata ([`import::Meta`]) the decks write beside themselves.
 //! * [`crosscode`]: the table of every metric of every code against the paper, the golden
 //!   values and our engine.
+//! * [`seeds`]: those tables over several seeds, each code's mean ± s.d.
 //!
 //! Imports run one way: `code` ← `import` ← `decks`; `crosscode` takes only [`Code`].
 
@@ -15,5 +16,6 @@ pub mod code;
 pub mod crosscode;
 pub mod decks;
 pub mod import;
+pub mod seeds;
 
 pub use code::{which, Code};
