@@ -354,6 +354,57 @@ fn run_rust(
     }
 }
 
+/// The comparisons of the last `compare` run in `dir`: one (`compare.json`) or one per seed
+/// (`compare-seeds.json` and `seed-K/compare.json`), whichever was written last.
+fn compare_runs(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Vec<(u64, Comparison)>> {
+    let (name, seed) = (scene.name.as_str(), scene.seed);
+    let single = dir.join("compare.json");
+    let over = dir.join("compare-seeds.json");
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    let use_seeds = match (modified(&single), modified(&over)) {
+        (Some(a), Some(b)) => b > a,
+        (None, Some(_)) => true,
+        _ => false,
+    };
+    let read = |path: &Path| -> Result<Comparison> {
+        let text = std::fs::read_to_string(path).with_context(|| {
+            format!(
+                "reading {}: run `grainbench compare {name}` first (golden update records its results)",
+                path.display()
+            )
+        })?;
+        let cmp: Comparison =
+            serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+        if cmp.scene != name {
+            bail!("{} holds scene {}, not {name}", path.display(), cmp.scene);
+        }
+        Ok(cmp)
+    };
+    if !use_seeds {
+        return Ok(vec![(seed, read(&single)?)]);
+    }
+    let text =
+        std::fs::read_to_string(&over).with_context(|| format!("reading {}", over.display()))?;
+    let summary: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", over.display()))?;
+    let seeds: Vec<u64> = summary["seeds"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|s| s.as_u64()).collect())
+        .unwrap_or_default();
+    if seeds.is_empty() {
+        bail!("{} lists no seed", over.display());
+    }
+    seeds
+        .into_iter()
+        .map(|s| {
+            Ok((
+                s,
+                read(&dir.join(format!("seed-{s}")).join("compare.json"))?,
+            ))
+        })
+        .collect()
+}
+
 /// Was `path` written by `reproduce --record` (several seeds and a paper table)?
 fn recorded_by_reproduce(path: &Path) -> bool {
     std::fs::read_to_string(path)
@@ -372,30 +423,14 @@ pub fn golden_update(
 ) -> Result<i32> {
     let scene = load_scene(scene)?;
     let dir = from.unwrap_or_else(|| Path::new("runs/compare").join(&scene.name));
-    let path = dir.join("compare.json");
-    let text = std::fs::read_to_string(&path).with_context(|| {
-        format!(
-            "reading {}: run `grainbench compare {}` first (golden update records its results)",
-            path.display(),
-            scene.name
-        )
-    })?;
     // Before the results: a code run through an adapter is read back by its registered name.
     let wanted = if codes.is_empty() {
         Vec::new()
     } else {
         xcode::parse_codes(codes, true)?
     };
-    let cmp: Comparison =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    if cmp.scene != scene.name {
-        bail!(
-            "{} holds scene {}, not {}",
-            path.display(),
-            cmp.scene,
-            scene.name
-        );
-    }
+    let runs = compare_runs(&dir, &scene)?;
+    let cmp = &runs[0].1;
     let mut written = 0;
     for c in &cmp.codes {
         if !wanted.is_empty() && !wanted.contains(&c.code) {
@@ -416,18 +451,37 @@ pub fn golden_update(
             );
             continue;
         }
+        // Every seed the code finished, in the order they ran.
+        let seeds: Vec<serde_json::Value> = runs
+            .iter()
+            .filter_map(|(seed, cmp)| {
+                let r = cmp
+                    .codes
+                    .iter()
+                    .find(|r| r.code == c.code && r.outcome == Outcome::Ran)?;
+                Some(serde_json::json!({
+                    "seed": seed,
+                    "status": r.status,
+                    "wall_seconds": r.wall_seconds,
+                    "metrics": r.metrics,
+                }))
+            })
+            .collect();
+        let seed_list = if runs.len() > 1 {
+            format!(
+                " --seeds {}",
+                join(&runs.iter().map(|(s, _)| *s).collect::<Vec<_>>())
+            )
+        } else {
+            String::new()
+        };
         let doc = serde_json::json!({
             "code": c.version.as_deref().map(clean_version),
             "scene": scene.name,
             "n": cmp.n,
-            "command": command.clone().unwrap_or_else(|| format!("grainbench compare {} --codes {}", scene.name, c.code)),
+            "command": command.clone().unwrap_or_else(|| format!("grainbench compare {} --codes {}{seed_list}", scene.name, c.code)),
             "deviations": c.deviations,
-            "seeds": [{
-                "seed": scene.seed,
-                "status": c.status,
-                "wall_seconds": c.wall_seconds,
-                "metrics": c.metrics,
-            }],
+            "seeds": seeds,
         });
         write_atomic(
             &out,
@@ -439,7 +493,7 @@ pub fn golden_update(
     if written == 0 {
         bail!(
             "nothing recorded: no code in {} ran to its end",
-            path.display()
+            dir.display()
         );
     }
     if written > 1 {

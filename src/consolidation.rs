@@ -2,10 +2,13 @@
 //! of each pressure level, loading and unloading — its fit by GRC08 (9) (T.III), the CSV and
 //! the plot of Φ(P*) against the paper's fit.
 
+use crate::common::contact_stiffness;
 use crate::run::{stage_file, STAGES};
 use anyhow::{Context, Result};
-use grainbench_comparisons::metrics::analyze;
 use grainbench_comparisons::metrics::consolidation::{self, ConsolidationFit, ConsolidationLaw};
+use grainbench_comparisons::metrics::moduli::Moduli;
+use grainbench_comparisons::metrics::stiffness::NormalStiffness;
+use grainbench_comparisons::metrics::{analyze, Options};
 use grainbench_comparisons::report::reproduction::SeedStats;
 use grainbench_comparisons::report::{paper, plots};
 use grainbench_engine::scene::Step;
@@ -23,6 +26,9 @@ pub struct Level {
     pub phi: f64,
     /// Coordination of the stage-end state (`None` without its snapshot).
     pub z: Option<Coordination>,
+    /// Elastic moduli of the stage-end state (`None` without its snapshot, or when they
+    /// cannot be computed: the error is printed).
+    pub moduli: Option<LevelModuli>,
     /// How the stage ended (`equilibrium`, `time-limit`, …).
     pub end: String,
 }
@@ -53,6 +59,44 @@ impl Coordination {
     }
 }
 
+/// Elastic moduli of a level's state, in units of K_N (GRC08 §VI, Fig. 22): B, G from the
+/// stiffness matrix, the Voigt B^V, G^V and Reuss B^R estimates, and the fraction of contacts
+/// carrying 95 % of the elastic energy of a pressure increment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LevelModuli {
+    pub bulk: f64,
+    pub shear: f64,
+    pub voigt_bulk: f64,
+    pub voigt_shear: f64,
+    pub reuss_bulk: Option<f64>,
+    pub energy_95: Option<f64>,
+}
+
+impl LevelModuli {
+    /// `m` divided by the linear law's K_N.
+    fn of(m: &Moduli, k_n: f64) -> LevelModuli {
+        LevelModuli {
+            bulk: m.bulk / k_n,
+            shear: m.shear / k_n,
+            voigt_bulk: m.voigt_bulk / k_n,
+            voigt_shear: m.voigt_shear / k_n,
+            reuss_bulk: m.reuss_bulk.map(|b| b / k_n),
+            energy_95: m.energy_95,
+        }
+    }
+
+    fn fields(&self) -> [Option<f64>; 6] {
+        [
+            Some(self.bulk),
+            Some(self.shear),
+            Some(self.voigt_bulk),
+            Some(self.voigt_shear),
+            self.reuss_bulk,
+            self.energy_95,
+        ]
+    }
+}
+
 /// Whether a scene runs pressure programs (GRC08 §II.D.2 cycles).
 pub fn has_program(scene: &Scene) -> bool {
     scene
@@ -80,11 +124,34 @@ pub fn levels(scene: &Scene, steps: &serde_json::Value, dir: &Path) -> Result<Ve
             continue;
         };
         let path = dir.join(STAGES).join(stage_file(stage));
-        let z = if path.exists() {
+        let (z, moduli) = if path.exists() {
             let snap = Snapshot::read(&path)?;
-            Coordination::of(&analyze(&snap, &Default::default()).metric_values())
+            // The moduli of the linear law (GRC08), without the rigidity counts (~10 s a level).
+            let law = contact_stiffness(scene, &snap).ok();
+            let k_n = match law.map(|l| l.normal) {
+                Some(NormalStiffness::Constant(k)) => Some(k),
+                _ => None,
+            };
+            let opts = Options {
+                moduli: law.filter(|_| k_n.is_some()),
+                rigidity: false,
+                ..Default::default()
+            };
+            let a = analyze(&snap, &opts);
+            let moduli = match (&a.moduli, k_n) {
+                (Some(Ok(m)), Some(k_n)) => Some(LevelModuli::of(m, k_n)),
+                (Some(Err(e)), _) => {
+                    eprintln!(
+                        "warning: no moduli at stage {stage} ({}): {e}",
+                        path.display()
+                    );
+                    None
+                }
+                _ => None,
+            };
+            (Coordination::of(&a.metric_values()), moduli)
         } else {
-            None
+            (None, None)
         };
         out.push(Level {
             stage,
@@ -94,6 +161,7 @@ pub fn levels(scene: &Scene, steps: &serde_json::Value, dir: &Path) -> Result<Ve
                 .as_f64()
                 .with_context(|| format!("stage {stage} report without a packing fraction"))?,
             z,
+            moduli,
             end: r["end"].as_str().unwrap_or("?").to_string(),
         });
     }
@@ -214,18 +282,25 @@ impl MeanCurve {
     }
 }
 
-/// Writes `consolidation.csv` (seed, branch, P*, Φ, z, z+, z−, z0, end of every level) into
-/// `out`.
+/// Writes `consolidation.csv` (seed, branch, P*, Φ, z, z+, z−, z0, the moduli in K_N, end of
+/// every level) into `out`.
 pub fn write_csv(out: &Path, seeds: &[SeedCurve]) -> Result<PathBuf> {
-    let mut text = String::from("seed,branch,stage,pressure,phi,z,z_plus,z_minus,z_zero,end\n");
+    let mut text = String::from(
+        "seed,branch,stage,pressure,phi,z,z_plus,z_minus,z_zero,B,G,B_V,G_V,B_R,E95,end\n",
+    );
+    let cell = |x: Option<f64>| x.map(|v| v.to_string()).unwrap_or_default();
     for SeedCurve { seed, levels, .. } in seeds {
         for l in levels {
             let z = match l.z {
                 Some(c) => c.parts().map(|x| x.to_string()).join(","),
                 None => ",,,".to_string(),
             };
+            let m = match l.moduli {
+                Some(m) => m.fields().map(cell).join(","),
+                None => ",,,,,".to_string(),
+            };
             text.push_str(&format!(
-                "{seed},{},{},{},{},{z},{}\n",
+                "{seed},{},{},{},{},{z},{m},{}\n",
                 if l.loading { "loading" } else { "unloading" },
                 l.stage,
                 l.pressure,
@@ -438,6 +513,80 @@ pub fn plot_coordination(out: &Path, seeds: &[SeedCurve]) -> Result<Vec<PathBuf>
     Ok(vec![files.svg, files.png])
 }
 
+/// GRC08 Fig. 22: the bulk and shear moduli along the cycle (in K_N, log scale), mean over
+/// the seeds at each level every seed reached with its moduli, with the Voigt estimates:
+/// `consolidation-moduli.svg` and `.png` in `out`; nothing without them.
+pub fn plot_moduli(out: &Path, seeds: &[SeedCurve]) -> Result<Vec<PathBuf>> {
+    type Curve = (String, Vec<(f64, f64)>, plots::Marks);
+    type Pick = (&'static str, fn(&LevelModuli) -> f64);
+    let pick: [Pick; 4] = [
+        ("B", |m| m.bulk),
+        ("G", |m| m.shear),
+        ("B^V (Voigt)", |m| m.voigt_bulk),
+        ("G^V (Voigt)", |m| m.voigt_shear),
+    ];
+    let mut owned: Vec<Curve> = Vec::new();
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+    for loading in [true, false] {
+        let branch: Vec<Vec<&Level>> = seeds
+            .iter()
+            .map(|s| {
+                s.levels
+                    .iter()
+                    .filter(|l| l.loading == loading && l.moduli.is_some())
+                    .collect()
+            })
+            .collect();
+        let Some(first) = branch.first() else {
+            continue;
+        };
+        let mut means: Vec<Vec<(f64, f64)>> = vec![Vec::new(); pick.len()];
+        for l in first {
+            let at: Vec<LevelModuli> = branch
+                .iter()
+                .filter_map(|b| b.iter().find(|m| same(m.pressure, l.pressure)))
+                .filter_map(|m| m.moduli)
+                .collect();
+            if at.len() < branch.len() {
+                continue;
+            }
+            for ((_, f), mean) in pick.iter().zip(means.iter_mut()) {
+                let v = at.iter().map(f).sum::<f64>() / at.len() as f64;
+                if v > 0.0 {
+                    mean.push((l.pressure, v));
+                }
+            }
+        }
+        let (name, marks) = if loading {
+            ("loading", plots::Marks::LinesAndPoints)
+        } else {
+            ("unloading", plots::Marks::Points)
+        };
+        for ((label, _), pts) in pick.iter().zip(means) {
+            if !pts.is_empty() {
+                owned.push((format!("{label}, {name}"), pts, marks));
+            }
+        }
+    }
+    if owned.is_empty() {
+        return Ok(Vec::new());
+    }
+    let series: Vec<plots::Series> = owned
+        .iter()
+        .map(|(l, p, m)| plots::Series::new(l, p).with_marks(*m))
+        .collect();
+    let title = match seeds.len() {
+        1 => "Elastic moduli along the cycle".to_string(),
+        n => format!("Elastic moduli along the cycle (mean of {n} seeds)"),
+    };
+    let mut spec = plots::LinePlot::new(&title, "P* = Pa/F0", "modulus / K_N", &series);
+    spec.x_axis = plots::Axis::Log;
+    spec.y_axis = plots::Axis::Log;
+    spec.legend_lower_right = true;
+    let files = plots::line_plot(&out.join("consolidation-moduli"), &spec)?;
+    Ok(vec![files.svg, files.png])
+}
+
 fn curve(law: &ConsolidationLaw, from: f64, to: f64) -> Vec<(f64, f64)> {
     (0..=80)
         .map(|q| from * (to / from).powf(q as f64 / 80.0))
@@ -456,6 +605,7 @@ mod tests {
             pressure,
             phi,
             z: None,
+            moduli: None,
             end: "equilibrium".into(),
         }
     }

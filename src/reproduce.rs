@@ -199,6 +199,10 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             Ok(files) => plotted.extend(files),
             Err(e) => eprintln!("warning: no coordination plot: {e}"),
         }
+        match consolidation::plot_moduli(&out, &curves) {
+            Ok(files) => plotted.extend(files),
+            Err(e) => eprintln!("warning: no moduli plot: {e}"),
+        }
     }
     let svgs: Vec<PathBuf> = plotted
         .iter()
@@ -239,6 +243,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             "ik.svg",
             "consolidation.svg",
             "consolidation-z.svg",
+            "consolidation-moduli.svg",
             "consolidation.csv",
         ] {
             let (from, to) = (out.join(f), path.with_file_name(f));

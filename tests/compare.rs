@@ -506,6 +506,31 @@ fn several_seeds_give_each_code_its_mean_and_spread() {
         svg.contains("rust (mean of 2 seeds"),
         "P(f) over the seeds' band"
     );
+
+    // `golden update` records both seeds; their mean is the golden value.
+    Command::cargo_bin("grainbench")
+        .unwrap()
+        .current_dir(dir.path())
+        .args(["golden", "update"])
+        .arg(&scene)
+        .arg("--from")
+        .arg(&out)
+        .assert()
+        .success();
+    let doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("golden/tiny/rust.json")).unwrap())
+            .unwrap();
+    let seeds = doc["seeds"].as_array().unwrap();
+    assert_eq!(seeds.len(), 2);
+    assert_eq!(
+        (seeds[0]["seed"].as_u64(), seeds[1]["seed"].as_u64()),
+        (Some(3), Some(5))
+    );
+    assert_eq!(seeds[1]["metrics"]["phi"].as_f64(), Some(b));
+    assert!(
+        doc["command"].as_str().unwrap().ends_with("--seeds 3,5"),
+        "{doc}"
+    );
 }
 
 #[test]

@@ -168,7 +168,7 @@ fn grc07_cohesive_rr_ci_equilibrates_in_its_bands() {
 }
 
 /// GRC08 §II.D.2's isotropic cycle at N = 400 (4 pressure levels per decade): every level
-/// ends at equilibrium with its state written, Φ never decreases on loading, unloading to
+/// ends at equilibrium with its state written, z+, z− and the moduli measured, Φ never decreases on loading, unloading to
 /// P* = 0.01 hardly changes Φ (GRC08 §III.E: the material does not rearrange), the fit of
 /// GRC08 (9) exists, and Φ_max and Φ at P* = 13.33 land in their bands (λ of one 400-disk
 /// sample is not banded: golden/ci-bands.toml says why).
@@ -198,7 +198,13 @@ fn grc08_cycle_ci_consolidates_in_its_bands() {
     let (loading, unloading): (Vec<_>, Vec<_>) = rows.iter().partition(|r| r[1] == "loading");
     assert_eq!((loading.len(), unloading.len()), (14, 14), "{csv}");
     for r in &rows {
-        assert_eq!(r[9], "equilibrium", "{csv}");
+        assert_eq!(r[15], "equilibrium", "{csv}");
+        // GRC08 §VI: every level's moduli, positive, with the Voigt bound above them.
+        let (b, g, b_v) = (num(r, 9), num(r, 10), num(r, 11));
+        assert!(
+            b > 0.0 && g > 0.0 && b_v > b,
+            "moduli of every level: {csv}"
+        );
         assert!(num(r, 5) > 2.0, "z of every level: {csv}");
         // GRC08 Fig. 17: compressive and tensile contacts both present at every level.
         assert!(
@@ -207,6 +213,7 @@ fn grc08_cycle_ci_consolidates_in_its_bands() {
         );
     }
     assert!(dir.path().join("consolidation-z.svg").exists());
+    assert!(dir.path().join("consolidation-moduli.svg").exists());
     for w in loading.windows(2) {
         assert!(num(w[0], 3) < num(w[1], 3), "{csv}");
         assert!(

@@ -221,7 +221,7 @@ fn moduli(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(5));
     group.bench_function("solve_3d_n4000", |b| {
-        b.iter(|| elastic_moduli(black_box(&snap3), &all3, &law))
+        b.iter(|| elastic_moduli(black_box(&snap3), &all3, &law, true))
     });
     group.bench_function("rigidity_2d_n400", |b| {
         b.iter(|| rigidity(black_box(&net2)))

@@ -110,6 +110,9 @@ pub struct Options {
     /// The contact stiffnesses, to compute the elastic moduli ([`moduli`]); `None` skips them
     /// (a snapshot does not carry its law: `analyze --moduli` takes it from the scene).
     pub moduli: Option<stiffness::ContactStiffness>,
+    /// With the moduli, also the mechanisms and force indeterminacy (GRC07 App. A; a dense
+    /// rank, seconds per 1400-disk state).
+    pub rigidity: bool,
 }
 
 impl Default for Options {
@@ -128,6 +131,7 @@ impl Default for Options {
             seed: DEFAULT_SEED,
             density_spacing: density::DEFAULT_SPACING,
             moduli: None,
+            rigidity: true,
         }
     }
 }
@@ -496,7 +500,9 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
         density_correlations(lengths, position, radius, a, phi, opts.density_spacing)
     });
     let fixed_rattlers = fixed.map(|(f, _)| f);
-    let moduli = opts.moduli.map(|law| elastic_moduli(snap, &backbone, &law));
+    let moduli = opts
+        .moduli
+        .map(|law| elastic_moduli(snap, &backbone, &law, opts.rigidity));
 
     let pressure = pressure::measure(snap, z, phi, mean_n);
 

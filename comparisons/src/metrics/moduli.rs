@@ -46,11 +46,13 @@ pub struct Moduli {
     pub distant: usize,
     pub dofs: usize,
     /// Mechanisms and force indeterminacy with the cell fixed (GRC07 App. A); `None` above
-    /// [`super::stiffness::MAX_RIGIDITY_DOFS`].
+    /// [`super::stiffness::MAX_RIGIDITY_DOFS`] or when not asked for.
     pub rigidity: Option<Rigidity>,
 }
 
-/// The moduli of `snap` carried by the interactions `contacts` (the backbone) under `law`.
+/// The moduli of `snap` carried by the interactions `contacts` (the backbone) under `law`,
+/// with the network's mechanisms and force indeterminacy when `with_rigidity` (a dense rank:
+/// seconds at a few thousand degrees of freedom, where the moduli take a fraction of one).
 ///
 /// # Errors
 /// No interaction; a degenerate contact; a stiffness matrix that is not positive definite
@@ -59,6 +61,7 @@ pub fn elastic_moduli(
     snap: &Snapshot,
     contacts: &[&Contact],
     law: &ContactStiffness,
+    with_rigidity: bool,
 ) -> Result<Moduli, String> {
     let d = snap.dimension;
     if contacts.is_empty() {
@@ -143,7 +146,7 @@ pub fn elastic_moduli(
         interactions: net.interactions,
         distant: net.distant,
         dofs: net.dofs,
-        rigidity: rigidity(&net),
+        rigidity: if with_rigidity { rigidity(&net) } else { None },
     })
 }
 
@@ -231,7 +234,7 @@ mod tests {
 
     fn moduli_of(snap: &Snapshot, law: &ContactStiffness) -> Moduli {
         let all: Vec<&Contact> = snap.contacts.iter().collect();
-        elastic_moduli(snap, &all, law).unwrap()
+        elastic_moduli(snap, &all, law, true).unwrap()
     }
 
     fn close(x: f64, y: f64, rel: f64) -> bool {
@@ -436,7 +439,7 @@ mod tests {
             ..linear(1e4, Some(1e4), None)
         };
         let all: Vec<&Contact> = snap.contacts.iter().collect();
-        let err = elastic_moduli(&snap, &all, &law).unwrap_err();
+        let err = elastic_moduli(&snap, &all, &law, true).unwrap_err();
         assert!(err.contains("not positive definite"), "{err}");
     }
 }
