@@ -6,6 +6,7 @@ use crate::common::contact_stiffness;
 use crate::run::{stage_file, STAGES};
 use anyhow::{Context, Result};
 use grainbench_comparisons::metrics::consolidation::{self, ConsolidationFit, ConsolidationLaw};
+use grainbench_comparisons::metrics::contact_changes::contact_changes;
 use grainbench_comparisons::metrics::moduli::Moduli;
 use grainbench_comparisons::metrics::stiffness::NormalStiffness;
 use grainbench_comparisons::metrics::{analyze, Options};
@@ -203,6 +204,46 @@ pub fn values(levels: &[Level], fit: Option<&ConsolidationFit>) -> Vec<(String, 
         v.push(("phi_at_pmax".into(), top.phi));
     }
     v
+}
+
+/// The compression step of GRC08 T.IV, P* = 0.177 → 0.237 (10^(-3/4) → 10^(-5/8) of the
+/// 10^(1/8) program).
+pub const STEP: (f64, f64) = (0.177, 0.237);
+
+/// GRC08 T.IV for one seed: the contacts kept, lost and gained in the loading step
+/// [`STEP`], with the relative changes of Φ and z (`dphi_rel`, `dz_rel`), from the levels'
+/// states in `dir/stages/`; `None` when the program has no such step or its states are
+/// missing.
+pub fn step_values(curve: &SeedCurve, dir: &Path) -> Result<Option<Vec<(String, f64)>>> {
+    let at = |p: f64| {
+        curve
+            .levels
+            .iter()
+            .find(|l| l.loading && (l.pressure / p - 1.0).abs() < 0.01)
+    };
+    let (Some(a), Some(b)) = (at(STEP.0), at(STEP.1)) else {
+        return Ok(None);
+    };
+    let read = |l: &Level| -> Result<Option<Snapshot>> {
+        let path = dir.join(STAGES).join(stage_file(l.stage));
+        Ok(if path.exists() {
+            Some(Snapshot::read(&path)?)
+        } else {
+            None
+        })
+    };
+    let (Some(sa), Some(sb)) = (read(a)?, read(b)?) else {
+        return Ok(None);
+    };
+    let Some(changes) = contact_changes(&sa, &sb) else {
+        return Ok(None);
+    };
+    let mut v = changes.values();
+    v.push(("dphi_rel".into(), b.phi / a.phi - 1.0));
+    if let (Some(za), Some(zb)) = (a.z, b.z) {
+        v.push(("dz_rel".into(), zb.z / za.z - 1.0));
+    }
+    Ok(Some(v))
 }
 
 /// One seed's levels and the fit of its loading branch.

@@ -182,8 +182,29 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     }
     let table = reproduction::build_pooled(&state_key, &values, &pooled)
         .with_context(|| format!("building the table of {state_key}"))?;
+    // GRC08 T.IV: the contacts of one compression step, where the paper gives them.
+    let step_state = state_key.replacen("consolidation", "step", 1);
+    let mut step_seeds = Vec::new();
+    if step_state != state_key && paper::paper_values(&step_state).is_some() {
+        for c in &curves {
+            let dir = out.join(format!("seed-{}", c.seed));
+            step_seeds.extend(consolidation::step_values(c, &dir)?);
+        }
+    }
+    let step_table = if step_seeds.is_empty() {
+        None
+    } else {
+        Some(
+            reproduction::build(&step_state, &step_seeds)
+                .with_context(|| format!("building the table of {step_state}"))?,
+        )
+    };
+    let markdown = match &step_table {
+        Some(t) => format!("{}\n{}", table.to_markdown(), t.to_markdown()),
+        None => table.to_markdown(),
+    };
     std::fs::create_dir_all(&out)?;
-    snapshot::write_atomic(&out.join("report.md"), table.to_markdown().as_bytes())?;
+    snapshot::write_atomic(&out.join("report.md"), markdown.as_bytes())?;
     snapshot::write_atomic(&out.join("report.csv"), table.to_csv().as_bytes())?;
     snapshot::write_atomic(&out.join("report.json"), table.to_json().as_bytes())?;
     let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
@@ -212,7 +233,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     let html = grainbench_comparisons::report::html::write(
         &out,
         &format!("grainbench reproduce {} --state {}", a.paper, a.state),
-        &table.to_markdown(),
+        &markdown,
         &svgs,
     )?;
     let not_equilibrated: Vec<u64> = runs
@@ -221,7 +242,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         .map(|r| r.seed)
         .collect();
     println!();
-    print!("{}", table.to_markdown());
+    print!("{markdown}");
     if !not_equilibrated.is_empty() {
         println!(
             "\nwarning: seeds {not_equilibrated:?} ended on a time limit, not at equilibrium: their metrics are of an unfinished packing"
@@ -233,7 +254,11 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         println!("plot       {}", p.display());
     }
     if a.record {
-        let path = record(a, &scene_name, &base, &state_key, &runs, &values, &table)?;
+        let tables = Tables {
+            main: &table,
+            step: step_table.as_ref(),
+        };
+        let path = record(a, &scene_name, &base, &state_key, &runs, &values, tables)?;
         println!("recorded   {}", path.display());
         // The table and the vector plots go beside the record, for reading on the web.
         for f in [
@@ -397,6 +422,12 @@ pub(crate) fn write_plots(
     written
 }
 
+/// The reproduction tables of a run: the state's, and GRC08 T.IV's step where it applies.
+struct Tables<'a> {
+    main: &'a reproduction::Reproduction,
+    step: Option<&'a reproduction::Reproduction>,
+}
+
 /// Writes golden/<scene>/rust.json: the command, the scene as run (`settings`, seed aside, with
 /// `--max-time` applied), and each seed's status, wall time, stages and metrics.
 fn record(
@@ -406,11 +437,11 @@ fn record(
     state_key: &str,
     runs: &[SeedRun],
     values: &[Vec<(String, f64)>],
-    table: &reproduction::Reproduction,
+    tables: Tables,
 ) -> Result<PathBuf> {
     let path = Path::new("golden").join(scene_name).join("rust.json");
     let seeds: Vec<String> = a.seeds.iter().map(|s| s.to_string()).collect();
-    let doc = serde_json::json!({
+    let mut doc = serde_json::json!({
         "code": format!("grainbench {}", env!("CARGO_PKG_VERSION")),
         "scene": scene_name,
         "paper_state": state_key,
@@ -433,8 +464,11 @@ fn record(
             "stages": r.steps,
             "metrics": v.iter().cloned().collect::<std::collections::BTreeMap<String, f64>>(),
         })).collect::<Vec<_>>(),
-        "table": table,
+        "table": tables.main,
     });
+    if let Some(step) = tables.step {
+        doc["step_table"] = serde_json::to_value(step)?;
+    }
     snapshot::write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     Ok(path)
 }

@@ -39,12 +39,14 @@
 //! * [`structure`]: g(r) and z(h) (AR07 §III.D).
 //! * [`mod@bond_order`]: Q4/Q6 local and global, crystalline bonds and grains (AR07 (31)–(34), T.II).
 //! * [`consolidation`]: GRC08 (9), the consolidation curve 1/Φ(P*), and its fit (T.III).
+//! * [`contact_changes`]: contacts kept, lost and gained in one compression step (GRC08 T.IV).
 //! * [`pressure`]: the pressure checks.
 //! * [`series`]: the data series (curves, histograms) the metrics return for plots.
 //! * this module: [`analyze`], [`Options`], [`Analysis`], [`Analysis::metric_values`].
 
 pub mod bond_order;
 pub mod consolidation;
+pub mod contact_changes;
 pub mod density;
 pub mod density_field;
 pub mod fixed_rattlers;
