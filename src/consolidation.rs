@@ -483,149 +483,131 @@ pub fn plot(
     Ok(vec![files.svg, files.png])
 }
 
-/// GRC08 Fig. 17: z, z+, z− and z0 along the cycle, averaged over the seeds at each level
-/// every seed reached with its state (lines on loading, markers on unloading):
-/// `consolidation-z.svg` and `.png` in `out`; nothing without the levels' states.
-pub fn plot_coordination(out: &Path, seeds: &[SeedCurve]) -> Result<Vec<PathBuf>> {
-    const NAMES: [&str; 4] = ["z", "z+ (compressive)", "z− (tensile)", "z0 (no force)"];
-    // (label, points, marks) of each curve.
-    type Curve = (String, Vec<(f64, f64)>, plots::Marks);
-    let mut owned: Vec<Curve> = Vec::new();
+/// A quantity read from a level, with its legend label.
+type Pick = (&'static str, fn(&Level) -> Option<f64>);
+/// (label, points, marks) of a curve along the cycle.
+type BranchCurve = (String, Vec<(f64, f64)>, plots::Marks);
+
+/// The seeds' mean of each quantity of `picks` at every level of each branch where every seed
+/// has it (lines on loading, markers on unloading); positive values only when `positive`
+/// (for a log axis).
+fn branch_curves(seeds: &[SeedCurve], picks: &[Pick], positive: bool) -> Vec<BranchCurve> {
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+    let mut out = Vec::new();
     for loading in [true, false] {
-        let branch: Vec<Vec<&Level>> = seeds
-            .iter()
-            .map(|s| {
-                s.levels
-                    .iter()
-                    .filter(|l| l.loading == loading && l.z.is_some())
-                    .collect()
-            })
-            .collect();
-        let Some(first) = branch.first() else {
-            continue;
-        };
-        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
-        let mut means: [Vec<(f64, f64)>; 4] = Default::default();
-        for l in first {
-            let at: Vec<Coordination> = branch
-                .iter()
-                .filter_map(|b| b.iter().find(|m| same(m.pressure, l.pressure)))
-                .filter_map(|m| m.z)
-                .collect();
-            if at.len() < branch.len() {
-                continue;
-            }
-            for (q, mean) in means.iter_mut().enumerate() {
-                let v = at.iter().map(|c| c.parts()[q]).sum::<f64>() / at.len() as f64;
-                mean.push((l.pressure, v));
-            }
-        }
         let (name, marks) = if loading {
             ("loading", plots::Marks::LinesAndPoints)
         } else {
             ("unloading", plots::Marks::Points)
         };
-        for (label, pts) in NAMES.iter().zip(means) {
+        for (label, pick) in picks {
+            let branch: Vec<Vec<(f64, f64)>> = seeds
+                .iter()
+                .map(|s| {
+                    s.levels
+                        .iter()
+                        .filter(|l| l.loading == loading)
+                        .filter_map(|l| Some((l.pressure, pick(l)?)))
+                        .collect()
+                })
+                .collect();
+            let Some(first) = branch.first() else {
+                continue;
+            };
+            let pts: Vec<(f64, f64)> = first
+                .iter()
+                .filter_map(|&(p, _)| {
+                    let at: Vec<f64> = branch
+                        .iter()
+                        .filter_map(|b| b.iter().find(|q| same(q.0, p)).map(|q| q.1))
+                        .collect();
+                    let mean = at.iter().sum::<f64>() / at.len() as f64;
+                    (at.len() == branch.len() && (!positive || mean > 0.0)).then_some((p, mean))
+                })
+                .collect();
             if !pts.is_empty() {
-                owned.push((format!("{label}, {name}"), pts, marks));
+                out.push((format!("{label}, {name}"), pts, marks));
             }
         }
     }
-    if owned.is_empty() {
+    out
+}
+
+/// A log-P* plot of `curves` titled with the seed count, into `out/<file>.svg` and `.png`;
+/// nothing without curves.
+fn cycle_plot(
+    out: &Path,
+    file: &str,
+    what: &str,
+    y_label: &str,
+    seeds: usize,
+    curves: &[BranchCurve],
+    style: impl FnOnce(&mut plots::LinePlot),
+) -> Result<Vec<PathBuf>> {
+    if curves.is_empty() {
         return Ok(Vec::new());
     }
-    let series: Vec<plots::Series> = owned
+    let series: Vec<plots::Series> = curves
         .iter()
         .map(|(l, p, m)| plots::Series::new(l, p).with_marks(*m))
         .collect();
-    let title = match seeds.len() {
-        1 => "Coordination along the cycle".to_string(),
-        n => format!("Coordination along the cycle (mean of {n} seeds)"),
+    let title = match seeds {
+        1 => format!("{what} along the cycle"),
+        n => format!("{what} along the cycle (mean of {n} seeds)"),
     };
-    let top = owned
+    let mut spec = plots::LinePlot::new(&title, "P* = Pa/F0", y_label, &series);
+    spec.x_axis = plots::Axis::Log;
+    style(&mut spec);
+    let files = plots::line_plot(&out.join(file), &spec)?;
+    Ok(vec![files.svg, files.png])
+}
+
+/// GRC08 Fig. 17: z, z+, z− and z0 along the cycle, averaged over the seeds at each level
+/// every seed reached with its state: `consolidation-z.svg` and `.png` in `out`; nothing
+/// without the levels' states.
+pub fn plot_coordination(out: &Path, seeds: &[SeedCurve]) -> Result<Vec<PathBuf>> {
+    let picks: [Pick; 4] = [
+        ("z", |l| l.z.map(|c| c.z)),
+        ("z+ (compressive)", |l| l.z.map(|c| c.z_plus)),
+        ("z− (tensile)", |l| l.z.map(|c| c.z_minus)),
+        ("z0 (no force)", |l| l.z.map(|c| c.z_zero)),
+    ];
+    let curves = branch_curves(seeds, &picks, false);
+    let top = curves
         .iter()
         .flat_map(|(_, p, _)| p.iter().map(|q| q.1))
         .fold(0.0, f64::max);
-    let mut spec = plots::LinePlot::new(&title, "P* = Pa/F0", "interactions per grain", &series);
-    spec.x_axis = plots::Axis::Log;
-    // Room above the curves for the legend.
-    spec.y_range = Some((0.0, 1.75 * top));
-    let files = plots::line_plot(&out.join("consolidation-z"), &spec)?;
-    Ok(vec![files.svg, files.png])
+    let (file, y) = ("consolidation-z", "interactions per grain");
+    cycle_plot(out, file, "Coordination", y, seeds.len(), &curves, |spec| {
+        // Room above the curves for the legend.
+        spec.y_range = Some((0.0, 1.75 * top));
+    })
 }
 
 /// GRC08 Fig. 22: the bulk and shear moduli along the cycle (in K_N, log scale), mean over
 /// the seeds at each level every seed reached with its moduli, with the Voigt estimates:
 /// `consolidation-moduli.svg` and `.png` in `out`; nothing without them.
 pub fn plot_moduli(out: &Path, seeds: &[SeedCurve]) -> Result<Vec<PathBuf>> {
-    type Curve = (String, Vec<(f64, f64)>, plots::Marks);
-    type Pick = (&'static str, fn(&LevelModuli) -> f64);
-    let pick: [Pick; 4] = [
-        ("B", |m| m.bulk),
-        ("G", |m| m.shear),
-        ("B^V (Voigt)", |m| m.voigt_bulk),
-        ("G^V (Voigt)", |m| m.voigt_shear),
+    let picks: [Pick; 4] = [
+        ("B", |l| l.moduli.map(|m| m.bulk)),
+        ("G", |l| l.moduli.map(|m| m.shear)),
+        ("B^V (Voigt)", |l| l.moduli.map(|m| m.voigt_bulk)),
+        ("G^V (Voigt)", |l| l.moduli.map(|m| m.voigt_shear)),
     ];
-    let mut owned: Vec<Curve> = Vec::new();
-    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
-    for loading in [true, false] {
-        let branch: Vec<Vec<&Level>> = seeds
-            .iter()
-            .map(|s| {
-                s.levels
-                    .iter()
-                    .filter(|l| l.loading == loading && l.moduli.is_some())
-                    .collect()
-            })
-            .collect();
-        let Some(first) = branch.first() else {
-            continue;
-        };
-        let mut means: Vec<Vec<(f64, f64)>> = vec![Vec::new(); pick.len()];
-        for l in first {
-            let at: Vec<LevelModuli> = branch
-                .iter()
-                .filter_map(|b| b.iter().find(|m| same(m.pressure, l.pressure)))
-                .filter_map(|m| m.moduli)
-                .collect();
-            if at.len() < branch.len() {
-                continue;
-            }
-            for ((_, f), mean) in pick.iter().zip(means.iter_mut()) {
-                let v = at.iter().map(f).sum::<f64>() / at.len() as f64;
-                if v > 0.0 {
-                    mean.push((l.pressure, v));
-                }
-            }
-        }
-        let (name, marks) = if loading {
-            ("loading", plots::Marks::LinesAndPoints)
-        } else {
-            ("unloading", plots::Marks::Points)
-        };
-        for ((label, _), pts) in pick.iter().zip(means) {
-            if !pts.is_empty() {
-                owned.push((format!("{label}, {name}"), pts, marks));
-            }
-        }
-    }
-    if owned.is_empty() {
-        return Ok(Vec::new());
-    }
-    let series: Vec<plots::Series> = owned
-        .iter()
-        .map(|(l, p, m)| plots::Series::new(l, p).with_marks(*m))
-        .collect();
-    let title = match seeds.len() {
-        1 => "Elastic moduli along the cycle".to_string(),
-        n => format!("Elastic moduli along the cycle (mean of {n} seeds)"),
-    };
-    let mut spec = plots::LinePlot::new(&title, "P* = Pa/F0", "modulus / K_N", &series);
-    spec.x_axis = plots::Axis::Log;
-    spec.y_axis = plots::Axis::Log;
-    spec.legend_lower_right = true;
-    let files = plots::line_plot(&out.join("consolidation-moduli"), &spec)?;
-    Ok(vec![files.svg, files.png])
+    let curves = branch_curves(seeds, &picks, true);
+    let (file, y) = ("consolidation-moduli", "modulus / K_N");
+    cycle_plot(
+        out,
+        file,
+        "Elastic moduli",
+        y,
+        seeds.len(),
+        &curves,
+        |spec| {
+            spec.y_axis = plots::Axis::Log;
+            spec.legend_lower_right = true;
+        },
+    )
 }
 
 fn curve(law: &ConsolidationLaw, from: f64, to: f64) -> Vec<(f64, f64)> {
