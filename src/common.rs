@@ -104,3 +104,12 @@ pub fn analysis_with_moduli(snap: &Snapshot, scene: &Scene) -> Analysis {
         },
     }
 }
+
+/// Seeds as a command line lists them: `1,2,3`.
+pub fn seed_list(seeds: &[u64]) -> String {
+    seeds
+        .iter()
+        .map(|s| s.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}

@@ -3,8 +3,9 @@
 //! them with the same `comparisons/` code, and writes the table (Markdown, CSV, JSON) and the
 //! overlaid P(f) and g(r) plots. `grainbench golden update` records the results.
 
-use crate::common::{analysis_with_moduli, load_scene, STOP};
+use crate::common::{analysis_with_moduli, load_scene, seed_list, STOP};
 use crate::external::{self, clean_version};
+use crate::reproduce::{pf_plot, pf_points};
 use crate::run::{run, RunFlags};
 use crate::xcode;
 use anyhow::{bail, Context, Result};
@@ -109,7 +110,11 @@ pub fn compare(a: &Args) -> Result<i32> {
     let svgs = seed_band_plots(&out, &per_code);
     grainbench_comparisons::report::html::write(
         &out,
-        &format!("grainbench compare {} --seeds {}", scene.name, join(seeds)),
+        &format!(
+            "grainbench compare {} --seeds {}",
+            scene.name,
+            seed_list(seeds)
+        ),
         &summary.to_markdown(true),
         &svgs,
     )?;
@@ -129,24 +134,12 @@ pub fn compare(a: &Args) -> Result<i32> {
     Ok(if summary.failures.is_empty() { 0 } else { 1 })
 }
 
-fn join(seeds: &[u64]) -> String {
-    seeds
-        .iter()
-        .map(|s| s.to_string())
-        .collect::<Vec<_>>()
-        .join(",")
-}
-
 /// P(f) of every code as the mean of its seeds over the band of their spread (`pf.svg/png`).
 fn seed_band_plots(out: &Path, per_code: &[(String, Vec<Analysis>)]) -> Vec<PathBuf> {
     let bands: Vec<(String, plots::SeedBand)> = per_code
         .iter()
         .filter_map(|(code, list)| {
-            let pf: Vec<Vec<(f64, f64)>> = list
-                .iter()
-                .filter_map(|a| a.forces.pdf.as_ref())
-                .map(|h| h.x.iter().copied().zip(h.y.iter().copied()).collect())
-                .collect();
+            let pf: Vec<Vec<(f64, f64)>> = list.iter().map(pf_points).collect();
             let label = format!("{code} (mean of {} seeds, band: their spread)", pf.len());
             Some((label, plots::seed_band(&pf)?))
         })
@@ -155,20 +148,14 @@ fn seed_band_plots(out: &Path, per_code: &[(String, Vec<Analysis>)]) -> Vec<Path
         .iter()
         .map(|(l, b)| plots::Series::new(l, &b.mean).with_band(&b.band))
         .collect();
-    let first = per_code.first().and_then(|(_, l)| l.first());
-    let cohesive = first.is_some_and(|a| a.cohesive);
-    let frictionless_spheres =
-        first.is_some_and(|a| a.dimension == 3 && a.mu == Some(0.0) && !a.cohesive);
     if series.is_empty() {
         return Vec::new();
     }
-    match plots::force_distribution(&out.join("pf"), &series, frictionless_spheres, cohesive) {
-        Ok(f) => vec![f.svg],
-        Err(e) => {
-            eprintln!("warning: no P(f) plot: {e}");
-            Vec::new()
-        }
-    }
+    let like = per_code.first().and_then(|(_, l)| l.first());
+    pf_plot(out, &series, like)
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+        .collect()
 }
 
 /// One seed: every code run from the scene's start, measured and compared.
@@ -470,7 +457,7 @@ pub fn golden_update(
         let seed_list = if runs.len() > 1 {
             format!(
                 " --seeds {}",
-                join(&runs.iter().map(|(s, _)| *s).collect::<Vec<_>>())
+                seed_list(&runs.iter().map(|(s, _)| *s).collect::<Vec<_>>())
             )
         } else {
             String::new()

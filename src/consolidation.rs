@@ -260,6 +260,11 @@ impl SeedCurve {
     }
 }
 
+/// Whether two levels' pressures are the same level of a program (seeds share the program).
+fn same_pressure(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs())
+}
+
 /// The seeds' mean loading curve and its fit by GRC08 (9): GRC08 §II.C averages "over all
 /// available samples" and T.III fits the averaged data, where one seed's fit can degenerate
 /// on the jumps of its curve.
@@ -279,13 +284,12 @@ impl MeanCurve {
         }
         let curves: Vec<Vec<(f64, f64)>> =
             seeds.iter().map(|s| loading_points(&s.levels)).collect();
-        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
         let points: Vec<(f64, f64, f64)> = curves[0]
             .iter()
             .filter_map(|&(p, _)| {
                 let phis: Vec<f64> = curves
                     .iter()
-                    .filter_map(|c| c.iter().find(|q| same(q.0, p)).map(|q| q.1))
+                    .filter_map(|c| c.iter().find(|q| same_pressure(q.0, p)).map(|q| q.1))
                     .collect();
                 (phis.len() == curves.len()).then(|| {
                     let sd = grainbench_comparisons::stats::sample_sd(&phis).unwrap_or(0.0);
@@ -492,7 +496,6 @@ type BranchCurve = (String, Vec<(f64, f64)>, plots::Marks);
 /// has it (lines on loading, markers on unloading); positive values only when `positive`
 /// (for a log axis).
 fn branch_curves(seeds: &[SeedCurve], picks: &[Pick], positive: bool) -> Vec<BranchCurve> {
-    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
     let mut out = Vec::new();
     for loading in [true, false] {
         let (name, marks) = if loading {
@@ -519,7 +522,7 @@ fn branch_curves(seeds: &[SeedCurve], picks: &[Pick], positive: bool) -> Vec<Bra
                 .filter_map(|&(p, _)| {
                     let at: Vec<f64> = branch
                         .iter()
-                        .filter_map(|b| b.iter().find(|q| same(q.0, p)).map(|q| q.1))
+                        .filter_map(|b| b.iter().find(|q| same_pressure(q.0, p)).map(|q| q.1))
                         .collect();
                     let mean = at.iter().sum::<f64>() / at.len() as f64;
                     (at.len() == branch.len() && (!positive || mean > 0.0)).then_some((p, mean))

@@ -2,6 +2,7 @@
 //! (checkpointed, resumable), measures every metric with the same code as `analyze`, and
 //! writes the table against the published values (golden/paper-values.toml) and the plots.
 
+use crate::common::seed_list;
 use crate::consolidation;
 use crate::run::{run, RunFlags, CHECKPOINT};
 use anyhow::{bail, Context, Result};
@@ -323,19 +324,11 @@ pub(crate) fn write_plots(
     mean_ik: Option<&density::MeanScattering>,
 ) -> Vec<PathBuf> {
     let mut written = Vec::new();
-    let pf: Vec<Vec<(f64, f64)>> = analyses
-        .iter()
-        .map(|a| points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y))))
-        .collect();
+    let pf: Vec<Vec<(f64, f64)>> = analyses.iter().map(pf_points).collect();
     let gr: Vec<Vec<(f64, f64)>> = analyses
         .iter()
         .map(|a| points(a.structure.pair_correlation.as_ref().map(|g| (&g.x, &g.y))))
         .collect();
-    // The DTS fit describes cohesionless frictionless spheres only; cohesive P(f) is of N itself.
-    let cohesive = analyses.first().is_some_and(|a| a.cohesive);
-    let frictionless_spheres = analyses
-        .first()
-        .is_some_and(|a| a.dimension == 3 && a.mu == Some(0.0) && !a.cohesive);
     fn series<'a>(pts: &'a [Vec<(f64, f64)>], labels: &'a [String]) -> Vec<plots::Series<'a>> {
         pts.iter()
             .zip(labels)
@@ -349,10 +342,7 @@ pub(crate) fn write_plots(
         Some(b) => vec![plots::Series::new(&band_label, &b.mean).with_band(&b.band)],
         None => series(&pf, labels),
     };
-    match plots::force_distribution(&out.join("pf"), &pf_series, frictionless_spheres, cohesive) {
-        Ok(f) => written.extend([f.svg, f.png]),
-        Err(e) => eprintln!("warning: no P(f) plot: {e}"),
-    }
+    written.extend(pf_plot(out, &pf_series, analyses.first()));
     match plots::pair_correlation(&out.join("gr"), &series(&gr, labels), Some(8.0)) {
         Ok(f) => written.extend([f.svg, f.png]),
         Err(e) => eprintln!("warning: no g(r) plot: {e}"),
@@ -440,7 +430,6 @@ fn record(
     tables: Tables,
 ) -> Result<PathBuf> {
     let path = Path::new("golden").join(scene_name).join("rust.json");
-    let seeds: Vec<String> = a.seeds.iter().map(|s| s.to_string()).collect();
     let mut doc = serde_json::json!({
         "code": format!("grainbench {}", env!("CARGO_PKG_VERSION")),
         "scene": scene_name,
@@ -448,7 +437,7 @@ fn record(
         "paper_description": paper::paper_values(state_key).map(|s| s.description.clone()),
         "command": format!(
             "grainbench reproduce {} --state {}{} --seeds {}{} -j {}",
-            a.paper, a.state, if a.ci { " --ci" } else { "" }, seeds.join(","),
+            a.paper, a.state, if a.ci { " --ci" } else { "" }, seed_list(&a.seeds),
             a.max_time.map(|t| format!(" --max-time {t}")).unwrap_or_default(),
             runs.first().map_or(rayon::current_num_threads(), |r| r.threads)
         ),
@@ -471,6 +460,30 @@ fn record(
     }
     snapshot::write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     Ok(path)
+}
+
+/// P(f) of an analysis as points (empty without one).
+pub(crate) fn pf_points(a: &Analysis) -> Vec<(f64, f64)> {
+    points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y)))
+}
+
+/// `pf.svg` and `.png` of `series`, styled for the packings `like` is one of: the DTS fit for
+/// cohesionless frictionless spheres only, P(f) of N itself for cohesive ones.
+pub(crate) fn pf_plot(
+    out: &Path,
+    series: &[plots::Series],
+    like: Option<&Analysis>,
+) -> Vec<PathBuf> {
+    let cohesive = like.is_some_and(|a| a.cohesive);
+    let frictionless_spheres =
+        like.is_some_and(|a| a.dimension == 3 && a.mu == Some(0.0) && !a.cohesive);
+    match plots::force_distribution(&out.join("pf"), series, frictionless_spheres, cohesive) {
+        Ok(f) => vec![f.svg, f.png],
+        Err(e) => {
+            eprintln!("warning: no P(f) plot: {e}");
+            Vec::new()
+        }
+    }
 }
 
 fn points(xy: Option<(&Vec<f64>, &Vec<f64>)>) -> Vec<(f64, f64)> {
