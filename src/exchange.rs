@@ -1,14 +1,16 @@
 //! `grainbench run-exchange IN OUT`: the reference implementation of the exchange format
 //! (docs/exchange-format.md). It reads only `IN/exchange.json` and `IN/particles.csv`, runs
 //! them in our engine as an explicit-particle scene, and writes `OUT/particles.csv`,
-//! `OUT/contacts.csv` and `OUT/status.txt` as any code must. With the adapter
+//! `OUT/contacts.csv` and `OUT/status.txt` as any code must (with the exchange's `trace`, also
+//! `OUT/trace-grains.csv` and `OUT/trace-contacts.csv`). With the adapter
 //! `reference-inputs/adapters/grainbench.toml` it proves the format end to end
 //! (`tests/adapter.rs`).
 
 use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::xcode::decks::generic::{
-    Exchange, ExchangeStage, EXCHANGE, OUT_CONTACTS, OUT_PARTICLES, OUT_STATUS,
+    Exchange, ExchangeStage, EXCHANGE, OUT_CONTACTS, OUT_PARTICLES, OUT_STATUS, OUT_TRACE_CONTACTS,
+    OUT_TRACE_GRAINS,
 };
 use grainbench_comparisons::xcode::decks::num;
 use grainbench_engine::scene::{Initial, Output, Particles, Scene, Step};
@@ -28,7 +30,7 @@ pub fn run_exchange(input: &Path, output: &Path, quiet: bool) -> Result<i32> {
         force: true,
         checkpoint_every: 0.0,
         dump_every: None,
-        trace_every: None,
+        trace_every: ex.trace.as_ref().map(|t| t.every),
         stage_snapshots: false,
     };
     let (code, outcome) = run(&scene, &work, &flags)?;
@@ -36,6 +38,18 @@ pub fn run_exchange(input: &Path, output: &Path, quiet: bool) -> Result<i32> {
         bail!("the run stopped before its final state (exit status {code})");
     };
     let loop_time: f64 = outcome.wall_seconds;
+    if let Some(t) = &ex.trace {
+        // Our run writes the exchange's trace files under these names; moved before the
+        // status line, which says the output is complete.
+        for (ours, theirs) in [
+            (OUT_TRACE_GRAINS, &t.grains),
+            (OUT_TRACE_CONTACTS, &t.contacts),
+        ] {
+            let from = work.join(ours);
+            std::fs::rename(&from, output.join(theirs))
+                .with_context(|| format!("moving {} into {}", from.display(), output.display()))?;
+        }
+    }
     write_state(&outcome.snapshot, output, loop_time)?;
     Ok(0)
 }

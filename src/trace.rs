@@ -6,6 +6,8 @@
 
 use anyhow::Result;
 use grainbench_comparisons::metrics::impact::{self, ImpactReport};
+// The exchange format's trace files are ours (docs/exchange-format.md).
+use grainbench_comparisons::xcode::decks::generic::{OUT_TRACE_CONTACTS, OUT_TRACE_GRAINS};
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
 use std::path::Path;
@@ -65,8 +67,8 @@ pub fn write(out: &Path, scene: &Scene, frames: &[Snapshot]) -> Result<Option<Im
             );
         }
     }
-    write_atomic(&out.join("trace-grains.csv"), grains.as_bytes())?;
-    write_atomic(&out.join("trace-contacts.csv"), contacts.as_bytes())?;
+    write_atomic(&out.join(OUT_TRACE_GRAINS), grains.as_bytes())?;
+    write_atomic(&out.join(OUT_TRACE_CONTACTS), contacts.as_bytes())?;
     if first.particles.radius.len() != 2 {
         return Ok(None);
     }

@@ -253,3 +253,120 @@ fn the_generic_deck_holds_the_start_and_the_protocol() {
         .failure()
         .stderr(predicates::str::contains("version 7"));
 }
+
+/// `python3` for pydem, the independent reference code; `None` where it is missing, outside CI.
+fn python3() -> Option<PathBuf> {
+    let found = grainbench_comparisons::xcode::which("python3");
+    if found.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI: python3 is needed to run pydem (reference-inputs/adapters/pydem)"
+        );
+        eprintln!("skipping pydem: python3 not installed");
+    }
+    found
+}
+
+fn impact_row<'a>(cmp: &'a Value, name: &str) -> &'a Value {
+    cmp["impacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["code"] == name)
+        .unwrap_or_else(|| panic!("no impact of {name} in {cmp}"))
+}
+
+/// pydem (reference-inputs/adapters/pydem/pydem.py): a Hertz–Mindlin DEM in pure Python,
+/// written from the format and AR07 without our engine, joins `compare` through its adapter
+/// and the exchange trace, and finds the impact our engine finds — the same velocity-Verlet
+/// scheme, so to round-off — within the analytic tolerances.
+#[test]
+fn pydem_an_independent_code_runs_the_oblique_impact_as_our_engine() {
+    if python3().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cmp");
+    let adapter = reference_adapter().with_file_name("pydem.toml");
+    let o = grainbench()
+        .args(["compare", "impact-oblique", "--quiet", "--codes"])
+        .arg(format!("rust,pydem={}", adapter.display()))
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "every impact check passes: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let cmp = compare_json(&out);
+    let p = code(&cmp, "pydem");
+    assert_eq!(p["outcome"], "ran", "{p}");
+    assert!(p["version"].as_str().unwrap().starts_with("pydem"), "{p}");
+    for f in ["final/trace-grains.csv", "final/trace-contacts.csv"] {
+        assert!(out.join("pydem").join(f).is_file(), "{f}");
+    }
+    let (ours, theirs) = (
+        &impact_row(&cmp, "rust")["report"]["measured"],
+        &impact_row(&cmp, "pydem")["report"]["measured"],
+    );
+    for q in [
+        "duration",
+        "peak_normal_force",
+        "restitution_normal",
+        "tangential_speed_after",
+    ] {
+        let (a, b) = (ours[q].as_f64().unwrap(), theirs[q].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-6 * a.abs(), "{q}: rust {a}, pydem {b}");
+    }
+    assert!(ours["peak_normal_force"].as_f64().unwrap() > 0.4, "{ours}");
+}
+
+/// A stage that changes μ (and κ) in mid-contact starts afresh as docs/exchange-format.md
+/// says — no contact history, spins at zero, forces evaluated with the stage's κ — in our
+/// engine and in pydem alike; a change of κ alone keeps the history.
+#[test]
+fn a_mu_change_in_mid_contact_starts_afresh_in_both_codes() {
+    if python3().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("reference-inputs/scenes/impact-oblique.toml"),
+    )
+    .unwrap()
+    .replace("name = \"impact-oblique\"", "name = \"impact-mu-change\"")
+    .replace(
+        "max_time = 5.05\nfull_time = true\n",
+        "max_time = 5.012\nfull_time = true\n\n[[protocol]]\nkind = \"fixed-volume\"\nmax_time = 0.04\nfull_time = true\nkappa = 20000.0\nmu = 0.5\n",
+    );
+    assert!(scene.contains("mu = 0.5"), "{scene}");
+    let path = dir.path().join("impact-mu-change.toml");
+    std::fs::write(&path, scene).unwrap();
+    let out = dir.path().join("cmp");
+    let adapter = reference_adapter().with_file_name("pydem.toml");
+    grainbench()
+        .args(["compare", path.to_str().unwrap(), "--quiet", "--codes"])
+        .arg(format!("rust,pydem={}", adapter.display()))
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let cmp = compare_json(&out);
+    assert_eq!(code(&cmp, "pydem")["outcome"], "ran", "{cmp}");
+    let (ours, theirs) = (
+        &impact_row(&cmp, "rust")["report"]["measured"],
+        &impact_row(&cmp, "pydem")["report"]["measured"],
+    );
+    for q in ["peak_normal_force", "tangential_speed_after"] {
+        let (a, b) = (ours[q].as_f64().unwrap(), theirs[q].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-6 * a.abs(), "{q}: rust {a}, pydem {b}");
+    }
+    let (a, b) = (
+        ours["spin_after"][1][2].as_f64().unwrap(),
+        theirs["spin_after"][1][2].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() <= 1e-6 * a.abs(), "spin: rust {a}, pydem {b}");
+}

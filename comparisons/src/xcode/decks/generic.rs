@@ -39,6 +39,20 @@ pub struct Exchange {
     pub stages: Vec<ExchangeStage>,
     /// What the code writes into its output directory.
     pub output: OutputFiles,
+    /// The time series of a few-body run (scene `output.trace_every`), if asked for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trace: Option<ExchangeTrace>,
+}
+
+/// A trace: every `every` time units (every step when below the time step), a frame of every
+/// grain (`grains`: `t,id,x,y[,z],vx,vy[,vz],w` or `wx,wy,wz`) and of every interacting pair
+/// (`contacts`: `t,i,j,fn,ft_x,ft_y[,ft_z]`, as `contacts.csv`), from t = 0 to the end.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ExchangeTrace {
+    pub every: f64,
+    pub grains: String,
+    pub contacts: String,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -125,6 +139,9 @@ pub const OUTPUT_DIR: &str = "final";
 pub const OUT_PARTICLES: &str = "particles.csv";
 pub const OUT_CONTACTS: &str = "contacts.csv";
 pub const OUT_STATUS: &str = "status.txt";
+/// Trace file names (in the output directory too).
+pub const OUT_TRACE_GRAINS: &str = "trace-grains.csv";
+pub const OUT_TRACE_CONTACTS: &str = "trace-contacts.csv";
 
 /// The exchange of `start`, and the text of its `particles.csv`.
 pub fn exchange(start: &Start) -> (Exchange, String) {
@@ -197,6 +214,14 @@ pub fn exchange(start: &Start) -> (Exchange, String) {
             contacts: OUT_CONTACTS.into(),
             status: OUT_STATUS.into(),
         },
+        trace: start
+            .trace_steps
+            .zip(start.stages.first())
+            .map(|(k, s)| ExchangeTrace {
+                every: k as f64 * s.dt,
+                grains: OUT_TRACE_GRAINS.into(),
+                contacts: OUT_TRACE_CONTACTS.into(),
+            }),
     };
     (ex, csv)
 }

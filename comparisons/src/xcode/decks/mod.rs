@@ -416,10 +416,12 @@ impl Start {
                 .filter(|_| code != Code::Liggghts || self.uniform_dt().is_some())
                 .map(|every| super::import::TraceMeta {
                     file: match code {
-                        Code::Yade => "trace.txt",
-                        _ => "trace.atoms",
-                    }
-                    .into(),
+                        Code::Yade => "trace.txt".into(),
+                        Code::Generic | Code::Adapter(_) => {
+                            format!("{}/{}", generic::OUTPUT_DIR, generic::OUT_TRACE_GRAINS)
+                        }
+                        _ => "trace.atoms".into(),
+                    },
                     every,
                     dt: self.uniform_dt(),
                 }),

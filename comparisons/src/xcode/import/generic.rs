@@ -1,8 +1,11 @@
 //! The final state a code writes in the exchange format (`docs/exchange-format.md`):
-//! `particles.csv`, `contacts.csv` and the one-line `status.txt` of its output directory.
+//! `particles.csv`, `contacts.csv` and the one-line `status.txt` of its output directory, and
+//! the trace of a few-body run (`trace-grains.csv`, `trace-contacts.csv`).
 
 use super::{ImportError, Meta, Raw, RawContact};
-use crate::xcode::decks::generic::{OUT_CONTACTS, OUT_PARTICLES, OUT_STATUS};
+use crate::xcode::decks::generic::{
+    OUT_CONTACTS, OUT_PARTICLES, OUT_STATUS, OUT_TRACE_CONTACTS, OUT_TRACE_GRAINS,
+};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -28,8 +31,145 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
             ),
         ));
     }
-    read_contacts(&dir.join(OUT_CONTACTS), d, &ids, &mut raw)?;
+    read_contacts(&dir.join(OUT_CONTACTS), d, &ids, &mut raw, None)?;
     Ok(raw)
+}
+
+/// The frames of the trace in `dir` (the code's output directory), in time order: grains from
+/// `trace-grains.csv` (sizes and masses from the final `particles.csv` by id), interacting
+/// pairs from `trace-contacts.csv` (each row in the frame of its `t`), the cell from
+/// `status.txt` (traces are of fixed cells); steps counted in the time step `dt` when known.
+pub fn read_trace(dir: &Path, meta: &Meta, dt: Option<f64>) -> Result<Vec<Raw>, ImportError> {
+    let d = meta.dimension;
+    let last = read_dir(dir, meta)?;
+    let ids = read_particles(&dir.join(OUT_PARTICLES), d, &mut Raw::default())?;
+    let grains = Table::read(&dir.join(OUT_TRACE_GRAINS))?;
+    let (ct, cid) = (grains.need("t")?, grains.need("id")?);
+    let pos: Vec<usize> = ["x", "y", "z"][..d]
+        .iter()
+        .map(|a| grains.need(a))
+        .collect::<Result<_, _>>()?;
+    let vel = grains.vector("v", d).ok_or_else(|| {
+        ImportError::new(
+            &grains.path,
+            format!(
+                "no velocity columns v{} in the header",
+                ["x", "y", "z"][..d].join(", v")
+            ),
+        )
+    })?;
+    let spin = if d == 2 {
+        grains.col("w").map(|c| vec![c])
+    } else {
+        grains.vector("w", d)
+    };
+    let n = last.position.len();
+    let mut frames: Vec<Raw> = Vec::new();
+    let mut seen = vec![false; n];
+    for r in 0..grains.rows.len() {
+        let t = grains.num(r, ct)?;
+        if frames.last().is_none_or(|f| f.time != t) {
+            if let Some(f) = frames.last() {
+                if t < f.time {
+                    return Err(ImportError::new(
+                        &grains.path,
+                        format!(
+                            "line {}: t = {t} after t = {}: frames must come in time order",
+                            r + 2,
+                            f.time
+                        ),
+                    ));
+                }
+                check_complete(&grains.path, f.time, &seen)?;
+            }
+            seen.iter_mut().for_each(|s| *s = false);
+            frames.push(Raw {
+                lengths: last.lengths.clone(),
+                position: vec![Vec::new(); n],
+                velocity: vec![Vec::new(); n],
+                angular_velocity: if spin.is_some() {
+                    vec![Vec::new(); n]
+                } else {
+                    Vec::new()
+                },
+                radius: last.radius.clone(),
+                mass: last.mass.clone(),
+                time: t,
+                step: dt.map_or(0, |dt| (t / dt).round() as u64),
+                status: "trace".into(),
+                ..Raw::default()
+            });
+        }
+        let id = grains.num(r, cid)?;
+        let Some(&k) = ids
+            .get(&(id as usize))
+            .filter(|_| id >= 0.0 && id.fract() == 0.0)
+        else {
+            return Err(ImportError::new(
+                &grains.path,
+                format!(
+                    "line {}, column `id`: no grain with id {id} in {OUT_PARTICLES}",
+                    r + 2
+                ),
+            ));
+        };
+        seen[k] = true;
+        let f = frames.last_mut().expect("a frame was pushed");
+        f.position[k] = pos
+            .iter()
+            .map(|&c| grains.num(r, c))
+            .collect::<Result<_, _>>()?;
+        f.velocity[k] = vel
+            .iter()
+            .map(|&c| grains.num(r, c))
+            .collect::<Result<_, _>>()?;
+        if let Some(w) = &spin {
+            f.angular_velocity[k] = w
+                .iter()
+                .map(|&c| grains.num(r, c))
+                .collect::<Result<_, _>>()?;
+        }
+    }
+    match frames.last() {
+        Some(f) => check_complete(&grains.path, f.time, &seen)?,
+        None => return Err(ImportError::new(&grains.path, "no frames")),
+    }
+    let contacts = dir.join(OUT_TRACE_CONTACTS);
+    let mut all = Raw::default();
+    let times = read_contacts(&contacts, d, &ids, &mut all, Some("t"))?;
+    for (c, t) in all.contacts.into_iter().zip(times) {
+        // The frame of this time (the two files come from one run: equal to rounding).
+        let k = frames.partition_point(|f| f.time < t - 1e-9 * t.abs().max(1.0));
+        match frames
+            .get_mut(k)
+            .filter(|f| (f.time - t).abs() <= 1e-9 * t.abs().max(1.0))
+        {
+            Some(f) => f.contacts.push(c),
+            None => {
+                return Err(ImportError::new(
+                    &contacts,
+                    format!("a contact at t = {t}, where {OUT_TRACE_GRAINS} has no frame"),
+                ))
+            }
+        }
+    }
+    Ok(frames)
+}
+
+/// Every grain listed in the frame at `t`.
+fn check_complete(path: &Path, t: f64, seen: &[bool]) -> Result<(), ImportError> {
+    match seen.iter().position(|s| !s) {
+        None => Ok(()),
+        Some(k) => Err(ImportError::new(
+            path,
+            format!(
+                "the frame at t = {t} lists {} of the {} grains (the grain in row {} of {OUT_PARTICLES} is missing)",
+                seen.iter().filter(|s| **s).count(),
+                seen.len(),
+                k + 2
+            ),
+        )),
+    }
 }
 
 /// A value of `status.txt` in `dir` (`version`, `loop_time`, …), if the code wrote it.
@@ -233,14 +373,18 @@ fn read_particles(
     Ok(ids)
 }
 
+/// The pairs of `path` into `raw`; with `time` (a trace), also each row's value of that column.
 fn read_contacts(
     path: &Path,
     d: usize,
     ids: &HashMap<usize, usize>,
     raw: &mut Raw,
-) -> Result<(), ImportError> {
+    time: Option<&str>,
+) -> Result<Vec<f64>, ImportError> {
     let t = Table::read(path)?;
     let (ci, cj, cn) = (t.need("i")?, t.need("j")?, t.need("fn")?);
+    let ct = time.map(|c| t.need(c)).transpose()?;
+    let mut times = Vec::new();
     let elastic = t.col("fn_elastic");
     let tangential = t.vector("ft_", d);
     let rolling = if d == 2 {
@@ -276,8 +420,11 @@ fn read_contacts(
             tangential: vec_of(&tangential)?,
             rolling: vec_of(&rolling)?,
         });
+        if let Some(c) = ct {
+            times.push(t.num(r, c)?);
+        }
     }
-    Ok(())
+    Ok(times)
 }
 
 #[cfg(test)]
@@ -376,5 +523,70 @@ mod tests {
         ]);
         let e = read_dir(d.path(), &meta(3)).unwrap_err().to_string();
         assert!(e.contains("2 grains") && e.contains("started 3"), "{e}");
+    }
+
+    #[test]
+    fn reads_a_trace_of_three_disks_with_its_contacts() {
+        let final_state = [
+            ("status.txt", "status=time-limit cell=6,6 steps=20 time=2\n"),
+            (
+                "particles.csv",
+                "id,x,y,diameter,mass\n5,1,1,1,1\n6,1.95,1,1,1\n7,4,4,0.5,0.125\n",
+            ),
+            ("contacts.csv", "i,j,fn\n"),
+        ];
+        let grains = "t,id,x,y,vx,vy,w\n\
+                      0,5,1,1,0,0,0\n0,6,2.1,1,-0.1,0,0\n0,7,4,4,0,0,0\n\
+                      1,7,4,4,0,0,0\n1,6,1.95,1,0,0,0.5\n1,5,1,1,0,0,0\n";
+        let mut files = final_state.to_vec();
+        files.push(("trace-grains.csv", grains));
+        files.push((
+            "trace-contacts.csv",
+            "t,i,j,gap,fn,ft_x,ft_y\n1,5,6,-0.05,0.5,0,0.1\n",
+        ));
+        let d = dir(&files);
+        let frames = read_trace(d.path(), &meta(3), Some(0.1)).unwrap();
+        assert_eq!(frames.len(), 2);
+        assert_eq!(
+            (frames[0].time, frames[1].time, frames[1].step),
+            (0.0, 1.0, 10)
+        );
+        assert!(frames[0].contacts.is_empty());
+        // Rows by id, in the order of the final particles.csv.
+        assert_eq!(frames[1].position[1], vec![1.95, 1.0]);
+        assert_eq!(frames[1].angular_velocity[1], vec![0.5]);
+        assert_eq!(frames[1].radius[2], 0.25);
+        let c = &frames[1].contacts[0];
+        assert_eq!(
+            (c.i, c.j, c.normal, c.tangential.clone()),
+            (0, 1, 0.5, vec![0.0, 0.1])
+        );
+        let snap = super::super::assemble(frames[1].clone(), &meta(3)).unwrap();
+        assert!((snap.contacts[0].gap + 0.05).abs() < 1e-12);
+
+        // A grain missing from a frame, a contact at a time without a frame.
+        let mut files = final_state.to_vec();
+        files.push((
+            "trace-grains.csv",
+            "t,id,x,y,vx,vy\n0,5,1,1,0,0\n0,6,2,1,0,0\n",
+        ));
+        files.push(("trace-contacts.csv", "t,i,j,fn\n"));
+        let e = read_trace(dir(&files).path(), &meta(3), None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("trace-grains.csv") && e.contains("2 of the 3 grains"),
+            "{e}"
+        );
+        let mut files = final_state.to_vec();
+        files.push(("trace-grains.csv", grains));
+        files.push(("trace-contacts.csv", "t,i,j,fn\n0.5,5,6,1\n"));
+        let e = read_trace(dir(&files).path(), &meta(3), None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("trace-contacts.csv") && e.contains("t = 0.5"),
+            "{e}"
+        );
     }
 }

@@ -7,10 +7,13 @@
 //! * YADE: `trace.txt`, `frame ITER TIME LX LY LZ` lines, each followed by one line per body
 //!   `id radius mass x y z vx vy vz wx wy wz fx fy fz`.
 //!
-//! Codes write no per-contact history, so the contact of a **two-grain** trace is rebuilt from
-//! the net force on grain 1 (the only force on it): in contact while the grains overlap, normal
-//! force f₁·n with n from grain 0 to 1, tangential force f₁ − (f₁·n)n. A trace of more grains
-//! keeps the grains only.
+//! * a code of the exchange format: `trace-grains.csv` and `trace-contacts.csv` in its output
+//!   directory (`docs/exchange-format.md`), contacts included.
+//!
+//! The other codes write no per-contact history, so the contact of a **two-grain** trace is
+//! rebuilt from the net force on grain 1 (the only force on it): in contact while the grains
+//! overlap, normal force f₁·n with n from grain 0 to 1, tangential force f₁ − (f₁·n)n. A trace
+//! of more grains from them keeps the grains only.
 
 use super::{assemble, atoms_of, branch, dump_frames, ImportError, Meta, Raw, RawContact};
 use crate::xcode::code::Code;
@@ -57,6 +60,15 @@ pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Option<Vec<Snapshot>>
             out
         }
         Code::Yade => yade_frames(&path, meta)?,
+        // The exchange format's trace carries its contacts, for any number of grains.
+        Code::Generic | Code::Adapter(_) => {
+            let out = path.parent().unwrap_or(dir);
+            return super::generic::read_trace(out, meta, t.dt)?
+                .into_iter()
+                .map(|raw| assemble(raw, meta).map_err(|m| ImportError::new(out, m)))
+                .collect::<Result<Vec<_>, _>>()
+                .map(Some);
+        }
         other => {
             return Err(ImportError::new(
                 &path,
