@@ -183,8 +183,10 @@ fn compare_one(
     );
     let mut results = Vec::new();
     let mut analyses: Vec<(String, Analysis)> = Vec::new();
-    // A traced two-body scene is an impact test in every code.
-    let mut impacts = (scene.output.trace_every.is_some() && start.n() == 2).then(Vec::new);
+    // A traced scene leaves every code's trace as ours (trace-grains.csv, trace-contacts.csv);
+    // with two grains it is an impact test in every code.
+    let traced = scene.output.trace_every.is_some();
+    let mut impacts = (traced && start.n() == 2).then(Vec::new);
     for &code in codes {
         if STOP.load(Ordering::SeqCst) {
             break;
@@ -200,8 +202,8 @@ fn compare_one(
             Code::Rust => run_rust(scene, &dir, a.quiet, &mut r)?,
             _ => external::run(&start, code, &dir, a.time_limit, a.np, a.quiet, &mut r)?,
         };
-        if let (Some(snap), Some(list)) = (&snap, impacts.as_mut()) {
-            if let Some(report) = impact_of(code, &dir, scene, snap)? {
+        if let (Some(snap), true) = (&snap, traced) {
+            if let (Some(report), Some(list)) = (trace_of(code, &dir, scene, snap)?, &mut impacts) {
                 list.push(CodeImpact {
                     code: code.name().into(),
                     report,
@@ -233,6 +235,13 @@ fn compare_one(
         results,
         &Bands::embedded(),
         impacts,
+        matches!(
+            scene.protocol.last(),
+            Some(grainbench_engine::scene::Step::FixedVolume {
+                full_time: true,
+                ..
+            })
+        ),
     );
     Ok((cmp, analyses))
 }
@@ -276,10 +285,11 @@ fn write_outputs(
     Ok(())
 }
 
-/// The impact of a traced two-body run: ours wrote `impact.json` itself; an external code's
-/// trace is read (closed by its final state), written as ours is (`trace-grains.csv`,
-/// `trace-contacts.csv`, `impact.json`) and measured the same way.
-fn impact_of(
+/// The trace of a traced run, and the impact of two grains: ours wrote its files and
+/// `impact.json` itself; an external code's trace is read (closed by its final state) and
+/// written as ours is (`trace-grains.csv`, `trace-contacts.csv`, and for two grains
+/// `impact.json`, measured the same way).
+fn trace_of(
     code: Code,
     dir: &Path,
     scene: &grainbench_engine::Scene,

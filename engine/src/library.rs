@@ -17,6 +17,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "xcode-dmt-smoke",
     "impact-normal",
     "impact-oblique",
+    "impact-chain",
     "ar07-A-n1372",
     "ar07-D-10kPa-n1372",
     "ar07-A",

@@ -85,7 +85,8 @@ def trace():
     if not TRACE:
         TRACE.append(open('trace.txt', 'w'))
         TRACE[0].write('# grainbench trace: `frame ITER TIME LX LY LZ`, then per body: '
-                       'id radius mass x y z vx vy vz wx wy wz fx fy fz\n')
+                       'id radius mass x y z vx vy vz wx wy wz fx fy fz, then per contact: '
+                       '`contact id1 id2 fn tx ty tz` (as final.interactions)\n')
     f = TRACE[0]
     sz = O.cell.size
     f.write('frame %d %r %r %r %r\n' % (O.iter, O.time, sz[0], sz[1], sz[2]))
@@ -95,6 +96,11 @@ def trace():
         vals = (b.shape.radius, b.state.mass, p[0], p[1], p[2], v[0], v[1], v[2],
                 w[0], w[1], w[2], fo[0], fo[1], fo[2])
         f.write('%d %s\n' % (b.id, ' '.join(repr(float(x)) for x in vals)))
+    for i in O.interactions:
+        if i.isReal:
+            t = i.phys.shearForce
+            f.write('contact %d %d %r %r %r %r\n' % (i.id1, i.id2,
+                    i.phys.normalForce.dot(i.geom.normal), t[0], t[1], t[2]))
 
 # Cell rates L̇_α (leapfrog half-step values), as in grainbench.
 LDOT = [0.0, 0.0, 0.0]

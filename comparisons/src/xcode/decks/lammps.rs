@@ -42,6 +42,11 @@ use grainbench_engine::scene::{Law, Mu, Relax};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 
+/// The columns of a contact dump: `compute property/local patom1 patom2` and `compute
+/// pair/local dist fx fy fz p1 p2 p3` (the importer's order, `import/lammps.rs`).
+const CONTACT_COLUMNS: &str =
+    "c_prl[1] c_prl[2] c_pl[1] c_pl[2] c_pl[3] c_pl[4] c_pl[5] c_pl[6] c_pl[7]";
+
 /// Tsuji et al. damping coefficient of a restitution `e`, as LAMMPS `damping tsuji`
 /// computes it (pair_granular.cpp).
 pub fn tsuji_coefficient(e: f64) -> f64 {
@@ -514,10 +519,12 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
     if let Some(k) = start.trace_steps {
         let _ = writeln!(
             s,
-            "\n# Trace (scene output.trace_every): every {k} steps each grain with its force\n\
-             # (docs/external-formats/lammps.md).\n\
+            "\n# Trace (scene output.trace_every): every {k} steps each grain with its force, and\n\
+             # each contact as in final.contacts (docs/external-formats/lammps.md).\n\
              dump tr all custom {k} trace.atoms id radius mass x y z vx vy vz omegax omegay omegaz fx fy fz\n\
-             dump_modify tr format float %.17g time yes"
+             dump_modify tr format float %.17g time yes\n\
+             dump trc all local {k} trace.contacts {CONTACT_COLUMNS}\n\
+             dump_modify trc format float %.17g"
         );
     }
     for (k, st) in start.stages.iter().enumerate() {
@@ -625,18 +632,19 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         }
     }
     if start.trace_steps.is_some() {
-        s.push_str("undump tr\n");
+        s.push_str("undump tr\nundump trc\n");
     }
-    s.push_str(
+    let _ = write!(
+        s,
         "\n# Final state (columns: docs/external-formats/lammps.md). The contacts are dumped at the\n\
          # setup of a `run 0` (no history update, forces from the final velocities), the atoms after\n\
          # it so that their fx fy fz are the same forces.\n\
-         dump fc all local 1 final.contacts c_prl[1] c_prl[2] c_pl[1] c_pl[2] c_pl[3] c_pl[4] c_pl[5] c_pl[6] c_pl[7]\n\
+         dump fc all local 1 final.contacts {CONTACT_COLUMNS}\n\
          dump_modify fc format float %.17g\n\
          run 0\n\
          undump fc\n\
          write_dump all custom final.atoms id radius mass x y z vx vy vz omegax omegay omegaz fx fy fz modify format float %.17g time yes\n\
-         print \"${status}\" file final.status\n",
+         print \"${{status}}\" file final.status\n",
     );
     s
 }

@@ -32,6 +32,10 @@ use super::{header_lines, num, Code, Deck, StageKind, Start};
 use grainbench_engine::scene::Law;
 use std::fmt::Write as _;
 
+/// The columns of a contact dump (`compute pgl all pair/gran/local id force delta`): id1 id2
+/// periodic-flag fx fy fz delta.
+const CONTACT_COLUMNS: &str = "c_pgl[1] c_pgl[2] c_pgl[3] c_pgl[4] c_pgl[5] c_pgl[6] c_pgl[7]";
+
 /// Smallest restitution LIGGGHTS 3.8.0 accepts (it requires 0.05 < e ≤ 1).
 pub const MIN_RESTITUTION: f64 = 0.0501;
 
@@ -164,10 +168,15 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
     if let Some(k) = start.trace_steps.filter(|_| start.uniform_dt().is_some()) {
         let _ = writeln!(
             s,
-            "# trace: every {k} steps each grain with its force (docs/external-formats/liggghts.md)\n\
+            "# trace: every {k} steps each grain with its force, and each contact\n\
+             # (docs/external-formats/liggghts.md)\n\
              dump tr all custom {k} trace.atoms id radius mass x y z vx vy vz omegax omegay omegaz fx fy fz\n\
-             dump_modify tr format \"%d {}\"",
-            vec!["%.17g"; 14].join(" ")
+             dump_modify tr format \"%d {}\"\n\
+             dump trc all local {k} trace.contacts {}\n\
+             dump_modify trc format \"{}\"",
+            vec!["%.17g"; 14].join(" "),
+            CONTACT_COLUMNS,
+            ["%.17g"; 7].join(" ")
         );
     }
     let mut prev_mu = first.mu;
@@ -281,13 +290,10 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
         }
         let _ = writeln!(s, "print \"stage {k1} end: ${{st}}\"\n");
     }
-    let cols = (1..=7)
-        .map(|c| format!("c_pgl[{c}]"))
-        .collect::<Vec<_>>()
-        .join(" ");
+    let cols = CONTACT_COLUMNS;
     let g17 = |n: usize| vec!["%.17g"; n].join(" ");
     if start.trace_steps.is_some() && start.uniform_dt().is_some() {
-        s.push_str("undump tr\n");
+        s.push_str("undump tr\nundump trc\n");
     }
     let _ = writeln!(
         s,

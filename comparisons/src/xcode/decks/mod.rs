@@ -424,6 +424,8 @@ impl Start {
                     },
                     every,
                     dt: self.uniform_dt(),
+                    contacts: matches!(code, Code::Lammps | Code::Lammps2025 | Code::Liggghts)
+                        .then(|| "trace.contacts".into()),
                 }),
         }
     }

@@ -16,20 +16,36 @@
 //! * `final.status`: one word (`equilibrium`, `time-limit`), optional.
 
 use super::{
-    last_dump_frame, read_atoms, read_status, unit_normal, ImportError, Meta, Raw, RawContact,
+    last_dump_frame, read_atoms, read_status, unit_normal, DumpSection, ImportError, Meta, Raw,
+    RawContact,
 };
+use std::collections::HashMap;
 use std::path::Path;
 
 /// Reads the final files of a LAMMPS run in `dir`.
 pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
-    let d = meta.dimension;
     let (mut raw, index) = read_atoms(&dir.join("final.atoms"), meta)?;
     raw.status = read_status(&dir.join("final.status"));
     let cpath = dir.join("final.contacts");
     let pairs = last_dump_frame(&cpath)?;
+    raw.contacts = contacts(&cpath, &pairs, &raw, &index, meta)?;
+    Ok(raw)
+}
+
+/// The contacts of one frame of a contact dump (`final.contacts`, or a frame of the trace's
+/// `trace.contacts`) between the grains of `raw` (`index`: atom id → grain).
+pub(super) fn contacts(
+    cpath: &Path,
+    pairs: &DumpSection,
+    raw: &Raw,
+    index: &HashMap<i64, usize>,
+    meta: &Meta,
+) -> Result<Vec<RawContact>, ImportError> {
+    let d = meta.dimension;
+    let mut out = Vec::with_capacity(pairs.rows.len());
     if pairs.columns.len() < 9 {
         return Err(ImportError::new(
-            &cpath,
+            cpath,
             format!(
                 "{} columns; want patom1 patom2 dist fx fy fz p1 p2 p3 first",
                 pairs.columns.len()
@@ -45,20 +61,20 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
         let atom = |k: usize| {
             index.get(&(r[k].round() as i64)).copied().ok_or_else(|| {
                 ImportError::new(
-                    &cpath,
-                    format!("contact names atom {} not in final.atoms", r[k]),
+                    cpath,
+                    format!("contact names atom {}, absent from the atoms dump", r[k]),
                 )
             })
         };
         let (i, j) = (atom(0)?, atom(1)?);
-        let n = unit_normal(&raw, i, j, d)
-            .ok_or_else(|| ImportError::new(&cpath, format!("atoms {i}, {j} coincide")))?;
+        let n = unit_normal(raw, i, j, d)
+            .ok_or_else(|| ImportError::new(cpath, format!("atoms {i}, {j} coincide")))?;
         // fx fy fz: normal force on i, along x_i − x_j when repulsive.
         let normal = -(0..d).map(|a| r[3 + a] * n[a]).sum::<f64>();
         // p1 p2 p3: tangential force on i; on j it is the opposite.
         // Read even for μ = 0, so that `assemble` can check the deck.json against them.
         let tangential = (0..d).map(|a| -r[6 + a]).collect();
-        raw.contacts.push(RawContact {
+        out.push(RawContact {
             i,
             j,
             normal,
@@ -67,7 +83,7 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
             rolling: Vec::new(),
         });
     }
-    Ok(raw)
+    Ok(out)
 }
 
 #[cfg(test)]

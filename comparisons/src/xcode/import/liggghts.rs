@@ -36,7 +36,9 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
     Ok(raw)
 }
 
-fn read_contacts(
+/// The contacts of one frame of a `pair/gran/local` dump (`final.contacts`, or a frame of the
+/// trace's `trace.contacts`) between the grains of `raw` (`ids`: atom id → grain).
+pub(super) fn read_contacts(
     path: &Path,
     sec: &DumpSection,
     raw: &Raw,
@@ -69,7 +71,7 @@ fn read_contacts(
             ids.get(&id).copied().ok_or_else(|| {
                 ImportError::new(
                     path,
-                    format!("contact names id {id}, absent from final.atoms"),
+                    format!("contact names id {id}, absent from the atoms dump"),
                 )
             })
         };

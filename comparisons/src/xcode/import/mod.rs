@@ -54,6 +54,11 @@ pub struct TraceMeta {
     pub every: u64,
     /// The time step of every stage (time = step × dt where the code writes no time).
     pub dt: Option<f64>,
+    /// The contacts of every frame in their own dump (LAMMPS, LIGGGHTS: `trace.contacts`,
+    /// frames matched by step); without it, YADE's `trace.txt` lists them in each frame, and a
+    /// trace of two grains is closed by their net forces.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contacts: Option<String>,
 }
 
 impl Meta {

@@ -15,13 +15,16 @@
 //! overlap, normal force f₁·n with n from grain 0 to 1, tangential force f₁ − (f₁·n)n. A trace
 //! of more grains from them keeps the grains only.
 
-use super::{assemble, atoms_of, branch, dump_frames, ImportError, Meta, Raw, RawContact};
+use super::{
+    assemble, atoms_of, branch, dump_frames, DumpSection, ImportError, Meta, Raw, RawContact,
+};
 use crate::xcode::code::Code;
 use grainbench_engine::snapshot::Snapshot;
+use std::collections::HashMap;
 use std::path::Path;
 
-/// A frame's grains and the net force on each.
-type Frame = (Raw, Vec<Vec<f64>>);
+/// A frame's grains, the net force on each, and whether the code listed its contacts.
+type Frame = (Raw, Vec<Vec<f64>>, bool);
 
 /// The frames of the trace in `dir`, in time order; `None` if the deck wrote none.
 pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Option<Vec<Snapshot>>, ImportError> {
@@ -31,6 +34,15 @@ pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Option<Vec<Snapshot>>
     let path = dir.join(&t.file);
     let frames: Vec<Frame> = match code {
         Code::Lammps | Code::Lammps2025 | Code::Liggghts => {
+            // The contact dump's frames by step (decks written before it existed have none).
+            let cpath = t.contacts.as_ref().map(|c| dir.join(c));
+            let mut pairs: HashMap<u64, DumpSection> = match &cpath {
+                Some(p) if p.exists() => dump_frames(p)?
+                    .into_iter()
+                    .map(|f| (f.timestep, f))
+                    .collect(),
+                _ => HashMap::new(),
+            };
             let mut out = Vec::new();
             for sec in dump_frames(&path)? {
                 let (mut raw, index) = atoms_of(&path, &sec, meta)?;
@@ -55,7 +67,18 @@ pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Option<Vec<Snapshot>>
                     forces[index[&(r[id].round() as i64)]] =
                         f[..meta.dimension].iter().map(|&c| r[c]).collect();
                 }
-                out.push((raw, forces));
+                let listed = match (pairs.remove(&sec.timestep), &cpath) {
+                    (Some(p), Some(cp)) => {
+                        raw.contacts = if code == Code::Liggghts {
+                            super::liggghts::read_contacts(cp, &p, &raw, &index, meta)?
+                        } else {
+                            super::lammps::contacts(cp, &p, &raw, &index, meta)?
+                        };
+                        true
+                    }
+                    _ => false,
+                };
+                out.push((raw, forces, listed));
             }
             out
         }
@@ -77,9 +100,9 @@ pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Option<Vec<Snapshot>>
         }
     };
     let mut snaps = Vec::with_capacity(frames.len());
-    for (mut raw, forces) in frames {
+    for (mut raw, forces, listed) in frames {
         raw.status = "trace".into();
-        if raw.position.len() == 2 {
+        if !listed && raw.position.len() == 2 {
             raw.contacts = two_grain_contact(&raw, &forces[1], meta.dimension);
         }
         snaps.push(assemble(raw, meta).map_err(|m| ImportError::new(&path, m))?);
@@ -143,12 +166,45 @@ fn yade_frames(path: &Path, meta: &Meta) -> Result<Vec<Frame>, ImportError> {
                     .collect::<Result<_, _>>()?,
                 ..Raw::default()
             };
-            frames.push((raw, Vec::new()));
+            frames.push((raw, Vec::new(), false));
             continue;
         }
-        let Some((raw, forces)) = frames.last_mut() else {
+        let Some((raw, forces, listed)) = frames.last_mut() else {
             return Err(bad("a body before the first `frame` line".into()));
         };
+        if fields[0] == "contact" {
+            // `contact id1 id2 fn tx ty tz`, as final.interactions (bodies listed first).
+            if fields.len() != 7 {
+                return Err(bad(format!(
+                    "{} fields; want `contact id1 id2 fn tx ty tz` (7)",
+                    fields.len()
+                )));
+            }
+            let body = |x: &str| -> Result<usize, ImportError> {
+                x.parse::<usize>()
+                    .ok()
+                    .filter(|&k| k < raw.position.len())
+                    .ok_or_else(|| bad(format!("contact names body {x}, not listed in its frame")))
+            };
+            let v: Vec<f64> = fields[3..]
+                .iter()
+                .map(|x| num(x))
+                .collect::<Result<_, _>>()?;
+            raw.contacts.push(RawContact {
+                i: body(fields[1])?,
+                j: body(fields[2])?,
+                normal: v[0],
+                normal_elastic: None,
+                tangential: if meta.mu == Some(0.0) {
+                    Vec::new()
+                } else {
+                    v[1..1 + d].to_vec()
+                },
+                rolling: Vec::new(),
+            });
+            *listed = true;
+            continue;
+        }
         if fields.len() != 15 {
             return Err(bad(format!(
                 "{} fields; want id radius mass x y z vx vy vz wx wy wz fx fy fz (15)",
@@ -172,7 +228,11 @@ fn yade_frames(path: &Path, meta: &Meta) -> Result<Vec<Frame>, ImportError> {
             "no `frame` line: no trace was written",
         ));
     }
-    for (k, (raw, _)) in frames.iter().enumerate() {
+    // A trace with contact lines lists every frame's contacts, none in some frames.
+    if frames.iter().any(|f| f.2) {
+        frames.iter_mut().for_each(|f| f.2 = true);
+    }
+    for (k, (raw, _, _)) in frames.iter().enumerate() {
         if meta.n != 0 && raw.position.len() != meta.n {
             return Err(ImportError::new(
                 path,
@@ -208,6 +268,7 @@ mod tests {
                 file: file.into(),
                 every: 1,
                 dt: Some(0.5),
+                contacts: None,
             }),
         }
     }
@@ -272,5 +333,39 @@ mod tests {
         std::fs::write(&path, cut).unwrap();
         let e = read(Code::Lammps, dir.path(), &m).unwrap_err();
         assert!(e.to_string().contains("trace.atoms"), "{e}");
+    }
+
+    /// Three bodies: YADE lists each frame's contacts (`contact id1 id2 fn tx ty tz`), and a
+    /// frame without contact lines has none, even where two grains would overlap.
+    #[test]
+    fn yade_frames_read_their_contact_lines() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("trace.txt"),
+            "frame 0 0.0 20 20 20\n\
+             0 0.5 1 5 5 5 0 0 0 0 0 0 0 0 0\n1 0.5 1 5.99 5 5 0 0 0 0 0 0 0 0 0\n\
+             2 0.5 1 7 5 5 0 0 0 0 0 0 0 0 0\n\
+             frame 1 0.1 20 20 20\n\
+             0 0.5 1 5 5 5 0 0 0 0 0 0 -2 0 0\n1 0.5 1 5.99 5 5 0 0 0 0 0 0 1 0 0\n\
+             2 0.5 1 6.98 5 5 0 0 0 0 0 0 1 0 0\n\
+             contact 0 1 2 0 0.25 0\ncontact 1 2 1 0 0 0\n",
+        )
+        .unwrap();
+        let mut m = meta("trace.txt");
+        m.n = 3;
+        let f = read(Code::Yade, dir.path(), &m).unwrap().unwrap();
+        assert!(f[0].contacts.is_empty(), "{:?}", f[0].contacts);
+        assert_eq!(f[1].contacts.len(), 2);
+        let c = &f[1].contacts[0];
+        assert_eq!((c.i, c.j, c.normal), (0, 1, 2.0));
+        assert!((c.tangential[1] - 0.25).abs() < 1e-12 && (c.gap + 0.01).abs() < 1e-12);
+        assert_eq!((f[1].contacts[1].i, f[1].contacts[1].j), (1, 2));
+        std::fs::write(
+            dir.path().join("trace.txt"),
+            "frame 0 0 20 20 20\ncontact 0 1 1 0 0 0\n",
+        )
+        .unwrap();
+        let e = read(Code::Yade, dir.path(), &m).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("body 0"), "{e}");
     }
 }
