@@ -10,10 +10,14 @@ use crate::run::{run, RunFlags};
 use crate::xcode;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::metrics::impact::ImpactReport;
+use grainbench_comparisons::metrics::pair_history;
 use grainbench_comparisons::metrics::Analysis;
 use grainbench_comparisons::outcome::Outcome;
 use grainbench_comparisons::report::plots;
-use grainbench_comparisons::xcode::crosscode::{self, Bands, CodeImpact, CodeResult, Comparison};
+use grainbench_comparisons::xcode::crosscode::{
+    self, Bands, CodeImpact, CodePairs, CodeResult, Comparison,
+};
+use grainbench_comparisons::xcode::decks::generic::OUT_TRACE_CONTACTS;
 use grainbench_comparisons::xcode::decks::{self, Code, StageKind, Start};
 use grainbench_comparisons::xcode::import::{self, Meta};
 use grainbench_comparisons::xcode::seeds;
@@ -228,7 +232,7 @@ fn compare_one(
         );
         results.push(r);
     }
-    let cmp = crosscode::build_with(
+    let mut cmp = crosscode::build_with(
         &scene.name,
         start.n(),
         Some(scene.paper_state.as_deref().unwrap_or(&scene.name)),
@@ -243,6 +247,21 @@ fn compare_one(
             })
         ),
     );
+    // More than two grains traced: each code's contacts, pair by pair, against ours.
+    if traced && start.n() > 2 {
+        let mut pairs = Vec::new();
+        for c in cmp.codes.iter().filter(|c| c.outcome == Outcome::Ran) {
+            let path = out.join(c.code.name()).join(OUT_TRACE_CONTACTS);
+            let text = std::fs::read_to_string(&path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            pairs.push(CodePairs {
+                code: c.code.name().into(),
+                pairs: pair_history::from_csv(&text)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?,
+            });
+        }
+        cmp.add_pairs(pairs);
+    }
     Ok((cmp, analyses))
 }
 

@@ -197,6 +197,19 @@ fn chain_impact_in_every_code_traces_both_contacts() {
             );
         }
     }
+    // The same, as compare reports it: a pair table per code, checked against ours.
+    let pairs = cmp["pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), ran.len(), "{cmp}");
+    assert!(
+        pairs
+            .iter()
+            .all(|c| c["pairs"].as_array().unwrap().len() == 2),
+        "{cmp}"
+    );
+    assert!(
+        text.contains("### Few-body contacts") && text.contains("| 1–2 peak force |"),
+        "{text}"
+    );
     // Ours: the last frame's velocities keep the momentum and the energy of the striker.
     let grains = std::fs::read_to_string(out.join("rust/trace-grains.csv")).unwrap();
     let last: Vec<Vec<f64>> = grains

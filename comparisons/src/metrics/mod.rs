@@ -57,6 +57,7 @@ pub mod impact;
 mod math;
 pub mod moduli;
 mod neighbors;
+pub mod pair_history;
 pub mod pressure;
 pub mod rattlers;
 pub mod series;

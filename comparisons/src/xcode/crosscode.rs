@@ -4,6 +4,7 @@
 
 use super::code::Code;
 use crate::metrics::impact::{Check, ImpactReport};
+use crate::metrics::pair_history::{PairHistory, PEAK_TOLERANCE};
 use crate::outcome::Outcome;
 use crate::report::format::dec4;
 use crate::report::paper;
@@ -128,6 +129,16 @@ pub struct Comparison {
     /// Two-body impacts (scenes with `output.trace_every`), per code.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub impacts: Vec<CodeImpact>,
+    /// The contacts of a traced scene of more than two grains, pair by pair, per code.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pairs: Vec<CodePairs>,
+}
+
+/// One code's contacts over a few-body trace (issue 19).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CodePairs {
+    pub code: String,
+    pub pairs: Vec<PairHistory>,
 }
 
 /// One code's two-body impact against the analytic values (issue 19).
@@ -366,6 +377,7 @@ pub fn build_with(
         rows,
         failures,
         impacts: impacts.unwrap_or_default(),
+        pairs: Vec::new(),
     }
 }
 
@@ -456,6 +468,9 @@ impl Comparison {
         if !self.impacts.is_empty() {
             s.push_str(&self.impact_markdown());
         }
+        if !self.pairs.is_empty() {
+            s.push_str(&self.pairs_markdown());
+        }
         for c in &self.codes {
             if !c.deviations.is_empty() {
                 s.push_str(&format!(
@@ -472,6 +487,87 @@ impl Comparison {
             for f in &self.failures {
                 s.push_str(&format!("- {f}\n"));
             }
+        }
+        s
+    }
+
+    /// Adds each code's contacts of a few-body trace and checks them against ours: every pair
+    /// we trace is traced, with its peak normal force within [`PEAK_TOLERANCE`].
+    pub fn add_pairs(&mut self, pairs: Vec<CodePairs>) {
+        if let Some(ours) = pairs.iter().find(|c| c.code == Code::Rust.name()) {
+            for c in pairs.iter().filter(|c| c.code != Code::Rust.name()) {
+                for p in &ours.pairs {
+                    match c.pairs.iter().find(|q| (q.i, q.j) == (p.i, p.j)) {
+                        None => self.failures.push(format!(
+                            "{}: no contact {}–{} in its trace (ours closes it at t = {:.6e})",
+                            c.code, p.i, p.j, p.first
+                        )),
+                        Some(q) => {
+                            let dev = q.peak_normal_force / p.peak_normal_force - 1.0;
+                            if dev.abs() > PEAK_TOLERANCE {
+                                self.failures.push(format!(
+                                    "{}: peak normal force of contact {}–{} {:.6e} differs from ours {:.6e} by {:+.2} % (tolerance {:.2} %)",
+                                    c.code, p.i, p.j, q.peak_normal_force, p.peak_normal_force,
+                                    100.0 * dev, 100.0 * PEAK_TOLERANCE
+                                ));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        self.pairs = pairs;
+    }
+
+    /// The few-body contact table: per pair, each code's peak normal force (Δ rust) and the
+    /// times it was closed.
+    fn pairs_markdown(&self) -> String {
+        let mut s = format!(
+            "\n### Few-body contacts\n\nPer pair (grains i–j): peak normal force (Δ rust; `*` beyond ± {:.0} %), and the first and last frame with the grains overlapping.\n\n| contact |",
+            100.0 * PEAK_TOLERANCE
+        );
+        for c in &self.pairs {
+            s.push_str(&format!(" {} |", c.code));
+        }
+        s.push_str("\n| --- |");
+        s.push_str(&" --- |".repeat(self.pairs.len()));
+        s.push('\n');
+        let mut keys: Vec<(usize, usize)> = self
+            .pairs
+            .iter()
+            .flat_map(|c| c.pairs.iter().map(|p| (p.i, p.j)))
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        let ours = self.pairs.iter().find(|c| c.code == Code::Rust.name());
+        let find =
+            |c: &CodePairs, k: (usize, usize)| c.pairs.iter().find(|p| (p.i, p.j) == k).cloned();
+        for k in keys {
+            let o = ours.and_then(|c| find(c, k));
+            s.push_str(&format!("| {}–{} peak force |", k.0, k.1));
+            for c in &self.pairs {
+                let cell = match (find(c, k), &o) {
+                    (Some(p), Some(o)) => {
+                        let dev = p.peak_normal_force / o.peak_normal_force - 1.0;
+                        format!(
+                            "{:.6e} ({:+.3} %){}",
+                            p.peak_normal_force,
+                            100.0 * dev,
+                            if dev.abs() > PEAK_TOLERANCE { " *" } else { "" }
+                        )
+                    }
+                    (Some(p), None) => format!("{:.6e}", p.peak_normal_force),
+                    (None, _) => "–".into(),
+                };
+                s.push_str(&format!(" {cell} |"));
+            }
+            s.push_str(&format!("\n| {}–{} closed |", k.0, k.1));
+            for c in &self.pairs {
+                let cell =
+                    find(c, k).map_or("–".into(), |p| format!("{:.6} – {:.6}", p.first, p.last));
+                s.push_str(&format!(" {cell} |"));
+            }
+            s.push('\n');
         }
         s
     }
