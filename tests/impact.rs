@@ -80,31 +80,33 @@ fn a_trace_of_a_large_scene_is_refused() {
         .stderr(predicates::str::contains("few-body"));
 }
 
-/// The same impact in every installed code, read from its trace (`output.trace_every`):
-/// `compare` checks each against Hertz and the sliding balance and fails otherwise. Under CI
-/// (CI=true) every code must be installed and have measured an impact.
-#[test]
-fn oblique_impact_in_every_code_matches_the_analytic_values() {
+/// `compare SCENE` in every code (into `<tempdir>/cmp`), which must pass: the directory, the
+/// printed report and compare.json.
+fn compare_in_every_code(scene: &str) -> (tempfile::TempDir, String, Value) {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("cmp");
     let run = Command::cargo_bin("grainbench")
         .unwrap()
         .args([
             "compare",
-            "impact-oblique",
+            scene,
             "--codes",
             "rust,lammps,lammps-2025,liggghts,yade",
             "-q",
             "-o",
         ])
-        .arg(&out)
+        .arg(dir.path().join("cmp"))
         .output()
         .unwrap();
-    let text = String::from_utf8_lossy(&run.stdout);
+    let text = String::from_utf8_lossy(&run.stdout).into_owned();
     println!("{text}");
     assert!(run.status.success(), "{text}");
-    let cmp: Value =
-        serde_json::from_slice(&std::fs::read(out.join("compare.json")).unwrap()).unwrap();
+    let cmp = serde_json::from_slice(&std::fs::read(dir.path().join("cmp/compare.json")).unwrap())
+        .unwrap();
+    (dir, text, cmp)
+}
+
+/// The codes that ran; under CI (CI=true) every code must be installed and run.
+fn ran(cmp: &Value) -> Vec<&str> {
     let ran: Vec<&str> = cmp["codes"]
         .as_array()
         .unwrap()
@@ -115,6 +117,17 @@ fn oblique_impact_in_every_code_matches_the_analytic_values() {
     if std::env::var_os("CI").is_some() {
         assert_eq!(ran.len(), 5, "every code must run under CI: {ran:?}");
     }
+    ran
+}
+
+/// The same impact in every installed code, read from its trace (`output.trace_every`):
+/// `compare` checks each against Hertz and the sliding balance and fails otherwise. Under CI
+/// (CI=true) every code must be installed and have measured an impact.
+#[test]
+fn oblique_impact_in_every_code_matches_the_analytic_values() {
+    let (dir, text, cmp) = compare_in_every_code("impact-oblique");
+    let out = dir.path().join("cmp");
+    let ran = ran(&cmp);
     let impacts = cmp["impacts"].as_array().unwrap();
     assert_eq!(impacts.len(), ran.len(), "an impact per code that ran");
     for i in impacts {
@@ -154,35 +167,9 @@ fn peaks(path: &std::path::Path) -> std::collections::BTreeMap<(usize, usize), f
 /// momentum and energy (ζ = 0). Under CI every code must run.
 #[test]
 fn chain_impact_in_every_code_traces_both_contacts() {
-    let dir = tempfile::tempdir().unwrap();
+    let (dir, text, cmp) = compare_in_every_code("impact-chain");
     let out = dir.path().join("cmp");
-    let run = Command::cargo_bin("grainbench")
-        .unwrap()
-        .args([
-            "compare",
-            "impact-chain",
-            "--codes",
-            "rust,lammps,lammps-2025,liggghts,yade",
-            "-q",
-            "-o",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&run.stdout);
-    assert!(run.status.success(), "{text}");
-    let cmp: Value =
-        serde_json::from_slice(&std::fs::read(out.join("compare.json")).unwrap()).unwrap();
-    let ran: Vec<&str> = cmp["codes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|c| c["outcome"] == "ran")
-        .map(|c| c["code"].as_str().unwrap())
-        .collect();
-    if std::env::var_os("CI").is_some() {
-        assert_eq!(ran.len(), 5, "every code must run under CI: {ran:?}");
-    }
+    let ran = ran(&cmp);
     let ours = peaks(&out.join("rust/trace-contacts.csv"));
     for pair in [(0, 1), (1, 2)] {
         assert!(ours[&pair] > 0.4, "{pair:?}: {ours:?}");

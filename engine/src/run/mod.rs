@@ -245,7 +245,13 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
         },
         None => {
             let mut sys = system_of(scene, law, &ctx.grains).map_err(|e| ctx.setup_error(e))?;
+            // The first half kick uses forces of the first stage's κ (the run's start, or a
+            // μ change; docs/exchange-format.md), the law kept as the base the stages scale.
+            let first = &ctx.stages[range.start].1;
+            let factor = StageNumerics::of_stage(scene, first, ctx.pressure).kappa_factor;
+            sys.law = law.with_kappa_scaled(factor);
             sys.init_forces();
+            sys.law = law;
             (sys, None)
         }
     };

@@ -264,20 +264,12 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
     let mut last_good = None;
     sys.save(&mut last_good);
     let stage_count = ctx.stages.len();
-    let fresh = resume_at.is_none();
-    let first = range.start;
     for k in range {
         let step = ctx.stages[k].1.clone();
         let kind = step.kind();
         let num = StageNumerics::of_stage(scene, &step, ctx.pressure);
         // κ of the stage; the time step follows.
         sys.law = base_law.with_kappa_scaled(num.kappa_factor);
-        if fresh && k == first && num.kappa_factor != 1.0 {
-            // A new system (the run's start, a μ change) evaluated its forces at the law's κ:
-            // the stage's first half kick uses the stage's (docs/exchange-format.md).
-            sys.compute_forces(0.0);
-            sys.accumulate(0.0);
-        }
         let (dt, k_max) = num.time_step(sys);
         sys.dt = dt;
         ctx.dt = dt;

@@ -11,6 +11,11 @@ use std::path::Path;
 
 /// Reads `dir`'s three files.
 pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
+    read_final(dir, meta).map(|(raw, _)| raw)
+}
+
+/// [`read_dir`], with the row of each grain id.
+fn read_final(dir: &Path, meta: &Meta) -> Result<(Raw, HashMap<usize, usize>), ImportError> {
     let d = meta.dimension;
     let status_path = dir.join(OUT_STATUS);
     let status =
@@ -32,7 +37,7 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
         ));
     }
     read_contacts(&dir.join(OUT_CONTACTS), d, &ids, &mut raw, None)?;
-    Ok(raw)
+    Ok((raw, ids))
 }
 
 /// The frames of the trace in `dir` (the code's output directory), in time order: grains from
@@ -41,8 +46,7 @@ pub fn read_dir(dir: &Path, meta: &Meta) -> Result<Raw, ImportError> {
 /// `status.txt` (traces are of fixed cells); steps counted in the time step `dt` when known.
 pub fn read_trace(dir: &Path, meta: &Meta, dt: Option<f64>) -> Result<Vec<Raw>, ImportError> {
     let d = meta.dimension;
-    let last = read_dir(dir, meta)?;
-    let ids = read_particles(&dir.join(OUT_PARTICLES), d, &mut Raw::default())?;
+    let (last, ids) = read_final(dir, meta)?;
     let grains = Table::read(&dir.join(OUT_TRACE_GRAINS))?;
     let (ct, cid) = (grains.need("t")?, grains.need("id")?);
     let pos: Vec<usize> = ["x", "y", "z"][..d]
