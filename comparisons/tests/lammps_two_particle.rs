@@ -57,6 +57,7 @@ fn start(h: f64, v1: [f64; 3], v2: [f64; 3], m: f64, steps: u64, dt: f64) -> Sta
         lengths: vec![20.0; 3],
         position: vec![vec![9.0, 10.0, 10.0], vec![10.0 - h, 10.0, 10.0]],
         velocity: vec![v1.to_vec(), v2.to_vec()],
+        spin: Vec::new(),
         diameter: vec![1.0, 1.0],
         mass: vec![m, m],
         inertia: vec![0.1 * m, 0.1 * m],

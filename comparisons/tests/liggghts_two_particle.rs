@@ -63,6 +63,7 @@ fn start(zeta: f64, h0: f64, v2: [f64; 3], steps: u64, dt: f64) -> Start {
         lengths: vec![10.0; 3],
         position: vec![vec![4.5, 5.0, 5.0], vec![5.5 - h0, 5.0, 5.0]],
         velocity: vec![vec![0.0; 3], v2.to_vec()],
+        spin: Vec::new(),
         diameter: vec![1.0, 1.0],
         mass: vec![1.0, 1.0],
         inertia: vec![0.1, 0.1],

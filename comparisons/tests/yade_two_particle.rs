@@ -101,6 +101,7 @@ fn setup() -> Setup {
         lengths: vec![l; 3],
         position: grains.iter().map(|g| g.0.to_vec()).collect(),
         velocity: grains.iter().map(|g| g.1.to_vec()).collect(),
+        spin: Vec::new(),
         diameter: vec![1.0; grains.len()],
         mass: grains.iter().map(|g| g.2).collect(),
         inertia: grains.iter().map(|g| 0.1 * g.2).collect(),

@@ -35,6 +35,8 @@ pub trait VectorOps:
     fn is_finite(&self) -> bool;
     /// Components as a slice-like vector (for snapshots).
     fn to_vec(&self) -> Vec<f64>;
+    /// From its components (as many as [`VectorOps::to_vec`] gives).
+    fn from_components(x: &[f64]) -> Self;
 }
 
 impl VectorOps for f64 {
@@ -52,6 +54,9 @@ impl VectorOps for f64 {
     }
     fn to_vec(&self) -> Vec<f64> {
         vec![*self]
+    }
+    fn from_components(x: &[f64]) -> Self {
+        x[0]
     }
 }
 
@@ -72,6 +77,9 @@ macro_rules! impl_linear_vec {
             }
             fn to_vec(&self) -> Vec<f64> {
                 self.iter().copied().collect()
+            }
+            fn from_components(x: &[f64]) -> Self {
+                <$t>::from_column_slice(x)
             }
         }
     };

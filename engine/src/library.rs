@@ -18,6 +18,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "impact-normal",
     "impact-oblique",
     "impact-chain",
+    "impact-spin",
     "ar07-A-n1372",
     "ar07-D-10kPa-n1372",
     "ar07-A",

@@ -247,8 +247,13 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
             let mut sys = system_of(scene, law, &ctx.grains).map_err(|e| ctx.setup_error(e))?;
             // The first half kick uses forces of the first stage's κ (the run's start, or a
             // μ change; docs/exchange-format.md), the law kept as the base the stages scale.
-            let first = &ctx.stages[range.start].1;
-            let factor = StageNumerics::of_stage(scene, first, ctx.pressure).kappa_factor;
+            // An empty range (a protocol that ended with hard-grain stages) keeps the law's κ.
+            let factor = match ctx.stages.get(range.start).filter(|_| !range.is_empty()) {
+                Some((_, first)) => {
+                    StageNumerics::of_stage(scene, first, ctx.pressure).kappa_factor
+                }
+                None => 1.0,
+            };
             sys.law = law.with_kappa_scaled(factor);
             sys.init_forces();
             sys.law = law;
@@ -277,9 +282,50 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
         l: sys.cell.l,
         s: sys.s.clone(),
         u: sys.u.clone(),
+        // A μ change starts with the grains' spins at zero (docs/exchange-format.md).
+        w: Vec::new(),
         diameter: sys.radius.iter().map(|r| 2.0 * r).collect(),
         time: sys.time,
         step: sys.step,
     };
     Ok((snap, stopped))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// A protocol of hard-grain stages only ends with a snapshot of the law's contacts (found
+    /// by tests/fuzz.rs: the first forces of that snapshot once looked up a stage past the end).
+    #[test]
+    fn a_protocol_of_hard_grain_stages_only_ends_with_a_snapshot() {
+        let text = r#"
+name = "hard-only"
+dimension = 3
+seed = 1
+[particles]
+count = 32
+[initial]
+arrangement = "fcc"
+packing_fraction = 0.45
+[law]
+kind = "hertz-mindlin"
+kappa = 39000.0
+mu = 0.3
+zeta = 0.98
+[[protocol]]
+kind = "hard-sphere-mix"
+collisions_per_grain = 5.0
+[[protocol]]
+kind = "expand"
+factor = 1.005
+"#;
+        let scene = Scene::from_toml(text, Path::new("hard-only.toml")).unwrap();
+        let out = run_scene(&scene, &mut RunOptions::default()).unwrap();
+        assert_eq!(out.snapshot.particles.radius.len(), 32);
+        assert!(out.steps.iter().all(|r| r.end.ok()));
+        // A gas at Φ = 0.45 / 1.005³ after hard-sphere collisions: no grain overlaps another.
+        assert!(out.snapshot.contacts.is_empty());
+    }
 }

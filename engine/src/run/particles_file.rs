@@ -7,8 +7,8 @@ use crate::geometry::{Dim, VectorOps as _};
 use std::path::Path;
 
 /// Reads the grains of `path` into a cell of side lengths `cell`: columns `x`, `y`, (`z`,)
-/// `diameter` and optionally `vx`, `vy`, (`vz`), by header name; errors name the file, the
-/// row and the column.
+/// `diameter` and optionally velocities `vx`, `vy`, (`vz`) and spins `w` (2D) or `wx`, `wy`,
+/// `wz` (3D), by header name; errors name the file, the row and the column.
 pub fn read<D: Dim>(path: &Path, cell: &[f64], n: usize) -> Result<Grains<D>, String> {
     let rd = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
@@ -29,8 +29,15 @@ pub fn inline<D: Dim>(
     cell: &[f64],
     n: usize,
 ) -> Result<Grains<D>, String> {
-    let names: std::collections::BTreeSet<&String> = grains.iter().flat_map(|g| g.keys()).collect();
-    let names: Vec<&String> = names.into_iter().collect();
+    let mut names: std::collections::BTreeSet<String> =
+        grains.iter().flat_map(|g| g.keys().cloned()).collect();
+    // A velocity or 3D spin listed in part: the components not listed are 0.
+    for group in [&VELOCITY[..D::D], &SPIN[1..]] {
+        if group.iter().any(|c| names.contains(*c)) {
+            names.extend(group.iter().map(|c| c.to_string()));
+        }
+    }
+    let names: Vec<String> = names.into_iter().collect();
     let mut text = names
         .iter()
         .map(|s| s.as_str())
@@ -40,10 +47,10 @@ pub fn inline<D: Dim>(
     for g in grains {
         let row: Vec<String> = names
             .iter()
-            .map(|k| match g.get(*k) {
+            .map(|k| match g.get(k) {
                 Some(x) => format!("{x:?}"),
-                // A grain without a velocity listed is at rest.
-                None if ["vx", "vy", "vz"].contains(&k.as_str()) => "0".into(),
+                // A grain without a velocity or spin listed is at rest.
+                None if VELOCITY.contains(&k.as_str()) || SPIN.contains(&k.as_str()) => "0".into(),
                 None => String::new(),
             })
             .collect();
@@ -51,6 +58,59 @@ pub fn inline<D: Dim>(
     }
     let rd = csv::ReaderBuilder::new().from_reader(text.as_bytes());
     parse(rd, "initial.grains", cell, n)
+}
+
+const VELOCITY: [&str; 3] = ["vx", "vy", "vz"];
+const SPIN: [&str; 4] = ["w", "wx", "wy", "wz"];
+
+/// The spin columns of the header in a `D`-dimensional scene: `w` (2D) or all of `wx`, `wy`,
+/// `wz` (3D), or none; the other dimension's names are refused.
+fn spin_columns<D: Dim>(
+    file: &str,
+    column: &impl Fn(&str) -> Option<usize>,
+) -> Result<Option<Vec<usize>>, String> {
+    let (ours, other): (&[&str], &[&str]) = if D::D == 2 {
+        (&SPIN[..1], &SPIN[1..])
+    } else {
+        (&SPIN[1..], &SPIN[..1])
+    };
+    if let Some(bad) = other.iter().find(|c| column(c).is_some()) {
+        return Err(format!(
+            "{file}: column `{bad}` is a spin of a {}D grain; spins in {}D are {}",
+            5 - D::D,
+            D::D,
+            ours.iter()
+                .map(|c| format!("`{c}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    components(file, "spin", ours, &column)
+}
+
+/// The columns of a vector quantity (`what`): all of `names`, or none of them.
+fn components(
+    file: &str,
+    what: &str,
+    names: &[&str],
+    column: &impl Fn(&str) -> Option<usize>,
+) -> Result<Option<Vec<usize>>, String> {
+    let found: Vec<Option<usize>> = names.iter().map(|c| column(c)).collect();
+    if found.iter().all(Option::is_none) {
+        return Ok(None);
+    }
+    match found.iter().position(Option::is_none) {
+        Some(k) => Err(format!(
+            "{file}: {what} column `{}` missing (give all of {}, or none)",
+            names[k],
+            names
+                .iter()
+                .map(|c| format!("`{c}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+        None => Ok(Some(found.into_iter().flatten().collect())),
+    }
 }
 
 fn parse<D: Dim, R: std::io::Read>(
@@ -80,13 +140,10 @@ fn parse<D: Dim, R: std::io::Read>(
     }
     let d_col =
         column("diameter").ok_or_else(|| format!("{file}: no column `diameter` in the header"))?;
-    let vel_cols: Option<Vec<usize>> = ["vx", "vy", "vz"]
-        .iter()
-        .take(D::D)
-        .map(|a| column(a))
-        .collect();
+    let spin_cols = spin_columns::<D>(file, &column)?;
+    let vel_cols = components(file, "velocity", &VELOCITY[..D::D], &column)?;
     let l = D::from_slice(cell);
-    let (mut s, mut u, mut diameter) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut s, mut u, mut w, mut diameter) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for (k, row) in rd.records().enumerate() {
         let row = row.map_err(|e| format!("{file}: {e}"))?;
         let line = k + 2;
@@ -118,6 +175,10 @@ fn parse<D: Dim, R: std::io::Read>(
                 v[a] = num(c)?;
             }
         }
+        if let Some(cols) = &spin_cols {
+            let spin: Vec<f64> = cols.iter().map(|&c| num(c)).collect::<Result<_, _>>()?;
+            w.push(D::Ang::from_components(&spin));
+        }
         s.push(x);
         u.push(v);
         diameter.push(d);
@@ -132,6 +193,7 @@ fn parse<D: Dim, R: std::io::Read>(
         l,
         s,
         u,
+        w,
         diameter,
         time: 0.0,
         step: 0,
@@ -158,6 +220,70 @@ mod tests {
         // x = 11 wraps to 1, y = −1 to 4.
         assert!((g.s[1][0] - 0.1).abs() < 1e-15 && (g.s[1][1] - 0.8).abs() < 1e-15);
         assert_eq!(g.u[1][1], -0.25);
+    }
+
+    #[test]
+    fn reads_spins_of_disks_and_spheres() {
+        let f = write("x,y,diameter,w\n1,1,1,0.5\n3,3,1,-2\n");
+        let g = read::<D2>(f.path(), &[10.0, 10.0], 2).unwrap();
+        assert_eq!(g.w, vec![0.5, -2.0]);
+        let f = write("x,y,z,diameter,wz,wx,wy\n1,1,1,1,3,1,2\n");
+        let g = read::<crate::geometry::D3>(f.path(), &[10.0; 3], 1).unwrap();
+        assert_eq!(g.w[0].to_vec(), vec![1.0, 2.0, 3.0]);
+        // Without spin columns the grains start at rest (an empty list).
+        let f = write("x,y,diameter\n1,1,1\n");
+        assert!(read::<D2>(f.path(), &[10.0, 10.0], 1).unwrap().w.is_empty());
+        // Inline grains without a spin start at rest.
+        let one = |pairs: &[(&str, f64)]| -> std::collections::BTreeMap<String, f64> {
+            pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+        };
+        let grains = [
+            one(&[("x", 1.0), ("y", 1.0), ("diameter", 1.0), ("w", 4.0)]),
+            one(&[("x", 3.0), ("y", 3.0), ("diameter", 1.0)]),
+        ];
+        assert_eq!(
+            inline::<D2>(&grains, &[10.0, 10.0], 2).unwrap().w,
+            vec![4.0, 0.0]
+        );
+        // … and the components of a velocity or 3D spin not listed are 0.
+        let grains = [one(&[
+            ("x", 1.0),
+            ("y", 1.0),
+            ("z", 1.0),
+            ("diameter", 1.0),
+            ("vx", -1.0),
+            ("wy", 2.0),
+        ])];
+        let g = inline::<crate::geometry::D3>(&grains, &[10.0; 3], 1).unwrap();
+        assert_eq!(
+            (g.u[0].to_vec(), g.w[0].to_vec()),
+            (vec![-1.0, 0.0, 0.0], vec![0.0, 2.0, 0.0])
+        );
+    }
+
+    #[test]
+    fn spins_of_the_other_dimension_or_incomplete_are_refused() {
+        let f = write("x,y,diameter,wz\n1,1,1,0.5\n");
+        let e = read::<D2>(f.path(), &[10.0, 10.0], 1).unwrap_err();
+        assert!(
+            e.contains("`wz`") && e.contains("3D") && e.contains("`w`"),
+            "{e}"
+        );
+        let f = write("x,y,z,diameter,w\n1,1,1,1,0.5\n");
+        let e = read::<crate::geometry::D3>(f.path(), &[10.0; 3], 1).unwrap_err();
+        assert!(e.contains("`w`") && e.contains("`wx`, `wy`, `wz`"), "{e}");
+        let f = write("x,y,z,diameter,wx,wz\n1,1,1,1,0.5,1\n");
+        let e = read::<crate::geometry::D3>(f.path(), &[10.0; 3], 1).unwrap_err();
+        assert!(e.contains("spin column `wy` missing"), "{e}");
+        let f = write("x,y,diameter,vx\n1,1,1,0.5\n");
+        let e = read::<D2>(f.path(), &[10.0, 10.0], 1).unwrap_err();
+        assert!(e.contains("velocity column `vy` missing"), "{e}");
+        let f = write("x,y,diameter,w\n1,1,1,fast\n");
+        let e = read::<D2>(f.path(), &[10.0, 10.0], 1).unwrap_err();
+        assert!(
+            e.contains("line 2") && e.contains("`w`") && e.contains("fast"),
+            "{e}"
+        );
     }
 
     #[test]

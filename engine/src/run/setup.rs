@@ -22,6 +22,11 @@ pub struct Grains<D: Dim> {
     pub l: D::V,
     pub s: Vec<D::V>,
     pub u: Vec<D::V>,
+    /// Spins (issue 19: explicit-particle starts); empty = all at rest. Not in checkpoints:
+    /// a checkpoint holds grains only at the start of a hard-grain stage, which ends with the
+    /// grains at rest.
+    #[serde(skip)]
+    pub w: Vec<D::Ang>,
     pub diameter: Vec<f64>,
     pub time: f64,
     pub step: u64,
@@ -72,6 +77,7 @@ pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
         l,
         s,
         u,
+        w: Vec::new(),
         diameter,
         time: 0.0,
         step: 0,
@@ -110,6 +116,7 @@ fn snapshot_grains<D: Dim>(path: &std::path::Path, n: usize) -> Result<Grains<D>
         l,
         s,
         u: vec![D::V::zero(); n],
+        w: Vec::new(),
         diameter: p.radius.iter().map(|r| 2.0 * r).collect(),
         time: 0.0,
         step: 0,
@@ -154,6 +161,9 @@ pub fn system_of<D: Dim, L: ContactLaw<D>>(
         scene.numerics.skin,
     );
     sys.u.clone_from(&grains.u);
+    if !grains.w.is_empty() {
+        sys.w.clone_from(&grains.w);
+    }
     sys.time = grains.time;
     sys.step = grains.step;
     let (dt, _) = StageNumerics::of_scene(scene).time_step(&sys);

@@ -68,6 +68,7 @@ impl<'s, D: Dim> Ctx<'s, D> {
                 l: D::V::zero(),
                 s: Vec::new(),
                 u: Vec::new(),
+                w: Vec::new(),
                 diameter: Vec::new(),
                 time: 0.0,
                 step: 0,
@@ -181,6 +182,7 @@ pub(super) fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize, step: &Step) -> Res
         _ => unreachable!("DEM stage in hard_stage"),
     };
     g.u = vec![D::V::zero(); n];
+    g.w = Vec::new();
     let phi: f64 = g.diameter.iter().map(|d| D::grain_volume(*d)).sum::<f64>() / D::product(g.l);
     ctx.reports.push(StepReport {
         index: k,

@@ -230,8 +230,9 @@ pub struct Initial {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub snapshot: Option<PathBuf>,
     /// Start instead from the grains listed in this CSV file (issue 19, explicit-particle
-    /// scenes): a header naming the columns `x`, `y`, (`z`,) `diameter`, optionally `vx`, `vy`,
-    /// (`vz`,) in any order, other columns ignored; one row per grain, positions in [0, L)
+    /// scenes): a header naming the columns `x`, `y`, (`z`,) `diameter`, optionally velocities
+    /// `vx`, `vy`, (`vz`,) and spins `w` (2D) or `wx`, `wy`, `wz` (3D), in any order, other
+    /// columns ignored; one row per grain, positions in [0, L)
     /// (wrapped if not), lengths in a. Needs `cell`; `particles.count` and `dimension` must
     /// match it; a relative path is taken from the working directory.
     #[serde(default, skip_serializing_if = "Option::is_none")]

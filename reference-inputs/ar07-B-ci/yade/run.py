@@ -49,12 +49,14 @@ with open('grains.txt') as f:
 if len(rows) != N:
     raise RuntimeError('grains.txt: %d grains, expected %d' % (len(rows), N))
 for r in rows:
-    x, y, z, d, m, vx, vy, vz = [float(v) for v in r]
+    x, y, z, d, m, vx, vy, vz = [float(v) for v in r[:8]]
     b = utils.sphere((x, y, z), 0.5 * d, material=mat)
     bid = O.bodies.append(b)
     b.state.mass = m
     b.state.inertia = Vector3(1, 1, 1) * (0.1 * m * d * d)
     b.state.vel = Vector3(vx, vy, vz)
+    if len(r) == 11:
+        b.state.angVel = Vector3(*[float(v) for v in r[8:]])
 
 O.engines = [
     ForceResetter(),

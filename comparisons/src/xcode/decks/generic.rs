@@ -151,6 +151,14 @@ pub fn exchange(start: &Start) -> (Exchange, String) {
     columns.extend(axes.iter().map(|a| a.to_string()));
     columns.extend(["diameter", "mass", "inertia"].map(String::from));
     columns.extend(axes.iter().map(|a| format!("v{a}")));
+    // Spins only for a start with spinning grains (optional columns).
+    let spinning = start.spinning();
+    if spinning {
+        match d {
+            2 => columns.push("w".into()),
+            _ => columns.extend(axes.iter().map(|a| format!("w{a}"))),
+        }
+    }
     let mut csv = columns.join(",") + "\n";
     for i in 0..start.n() {
         let mut row = vec![i.to_string()];
@@ -159,6 +167,11 @@ pub fn exchange(start: &Start) -> (Exchange, String) {
         row.push(num(start.mass[i]));
         row.push(num(start.inertia[i]));
         row.extend(start.velocity[i].iter().map(|&x| num(x)));
+        if spinning {
+            let w = start.spin3(i);
+            let w = if d == 2 { &w[2..] } else { &w[..] };
+            row.extend(w.iter().map(|&x| num(x)));
+        }
         csv += &(row.join(",") + "\n");
     }
     let dem: Vec<_> = start.scene.stages()[start.prelude.len()..]

@@ -422,11 +422,21 @@ fn data(start: &Start, classes: Option<&Classes>) -> String {
             num(p[1])
         );
     }
-    if start.velocity.iter().flatten().any(|&v| v != 0.0) {
+    if start.velocity.iter().flatten().any(|&v| v != 0.0) || start.spinning() {
         s.push_str("\nVelocities\n\n");
         for (i, v) in start.velocity.iter().enumerate() {
             let vz = if d3 { num(v[2]) } else { "0".into() };
-            let _ = writeln!(s, "{} {} {} {vz} 0 0 0", i + 1, num(v[0]), num(v[1]));
+            let w = start.spin3(i).map(num);
+            let _ = writeln!(
+                s,
+                "{} {} {} {vz} {} {} {}",
+                i + 1,
+                num(v[0]),
+                num(v[1]),
+                w[0],
+                w[1],
+                w[2]
+            );
         }
     }
     s

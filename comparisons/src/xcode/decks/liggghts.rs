@@ -354,17 +354,21 @@ fn data_file(start: &Start) -> String {
             num(c(2))
         );
     }
-    if start.velocity.iter().flatten().any(|&v| v != 0.0) {
+    if start.velocity.iter().flatten().any(|&v| v != 0.0) || start.spinning() {
         s.push_str("\nVelocities\n\n");
         for (i, v) in start.velocity.iter().enumerate() {
             let c = |a: usize| v.get(a).copied().unwrap_or(0.0);
+            let w = start.spin3(i).map(num);
             let _ = writeln!(
                 s,
-                "{} {} {} {} 0 0 0",
+                "{} {} {} {} {} {} {}",
                 i + 1,
                 num(c(0)),
                 num(c(1)),
-                num(c(2))
+                num(c(2)),
+                w[0],
+                w[1],
+                w[2]
             );
         }
     }

@@ -101,6 +101,9 @@ pub struct Start {
     /// diameter a: m = d^dimension), moments of inertia (m d²/10 spheres, m d²/8 disks).
     pub position: Vec<Vec<f64>>,
     pub velocity: Vec<Vec<f64>>,
+    /// Spins (one component in 2D, three in 3D) of an explicit-particle start; empty = all
+    /// at rest.
+    pub spin: Vec<Vec<f64>>,
     pub diameter: Vec<f64>,
     pub mass: Vec<f64>,
     pub inertia: Vec<f64>,
@@ -170,6 +173,20 @@ impl Start {
 
     pub fn n(&self) -> usize {
         self.diameter.len()
+    }
+
+    /// Does any grain start spinning?
+    pub fn spinning(&self) -> bool {
+        self.spin.iter().flatten().any(|&w| w != 0.0)
+    }
+
+    /// The spin of grain `i` as a 3D vector (a disk spins about z).
+    pub fn spin3(&self, i: usize) -> [f64; 3] {
+        match self.spin.get(i).map(Vec::as_slice) {
+            Some(&[w]) => [0.0, 0.0, w],
+            Some(&[x, y, z]) => [x, y, z],
+            _ => [0.0; 3],
+        }
     }
 
     /// The scene's law, in reduced units.
@@ -282,6 +299,7 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
             .map(|i| D::mul(grains.s[i], grains.l).to_vec())
             .collect(),
         velocity: grains.u.iter().map(|u| u.to_vec()).collect(),
+        spin: grains.w.iter().map(|w| w.to_vec()).collect(),
         inertia: mass
             .iter()
             .zip(&grains.diameter)

@@ -105,13 +105,19 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
     s.push_str("]\n");
     s.push_str(SCRIPT);
 
-    let mut g = String::from("# x y z diameter mass vx vy vz\n");
+    // Spins (wx wy wz) only for a start with spinning grains.
+    let spinning = start.spinning();
+    let mut g = String::from(if spinning {
+        "# x y z diameter mass vx vy vz wx wy wz\n"
+    } else {
+        "# x y z diameter mass vx vy vz\n"
+    });
     for i in 0..start.n() {
         let p = &start.position[i];
         let v = &start.velocity[i];
         let c = |x: &[f64], a: usize| x.get(a).copied().unwrap_or(0.0);
         g.push_str(&format!(
-            "{} {} {} {} {} {} {} {}\n",
+            "{} {} {} {} {} {} {} {}",
             num(c(p, 0)),
             num(c(p, 1)),
             num(c(p, 2)),
@@ -121,6 +127,13 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
             num(c(v, 1)),
             num(c(v, 2)),
         ));
+        if spinning {
+            for w in start.spin3(i) {
+                g.push(' ');
+                g.push_str(&num(w));
+            }
+        }
+        g.push('\n');
     }
     Deck {
         code: Code::Yade,
@@ -153,12 +166,14 @@ with open('grains.txt') as f:
 if len(rows) != N:
     raise RuntimeError('grains.txt: %d grains, expected %d' % (len(rows), N))
 for r in rows:
-    x, y, z, d, m, vx, vy, vz = [float(v) for v in r]
+    x, y, z, d, m, vx, vy, vz = [float(v) for v in r[:8]]
     b = utils.sphere((x, y, z), 0.5 * d, material=mat)
     bid = O.bodies.append(b)
     b.state.mass = m
     b.state.inertia = Vector3(1, 1, 1) * (0.1 * m * d * d)
     b.state.vel = Vector3(vx, vy, vz)
+    if len(r) == 11:
+        b.state.angVel = Vector3(*[float(v) for v in r[8:]])
 
 O.engines = [
     ForceResetter(),
