@@ -31,8 +31,10 @@ pub fn inline<D: Dim>(
 ) -> Result<Grains<D>, String> {
     let mut names: std::collections::BTreeSet<String> =
         grains.iter().flat_map(|g| g.keys().cloned()).collect();
-    // A velocity or 3D spin listed in part: the components not listed are 0.
-    for group in [&VELOCITY[..D::D], &SPIN[1..]] {
+    // A velocity or 3D spin listed in part: the components not listed are 0 (in 2D a `wx`
+    // … is left for `spin_columns` to refuse by its own name).
+    let spin3: &[&str] = if D::D == 3 { &SPIN[1..] } else { &[] };
+    for group in [&VELOCITY[..D::D], spin3] {
         if group.iter().any(|c| names.contains(*c)) {
             names.extend(group.iter().map(|c| c.to_string()));
         }
@@ -269,6 +271,12 @@ mod tests {
             e.contains("`wz`") && e.contains("3D") && e.contains("`w`"),
             "{e}"
         );
+        let grains = [[("x", 1.0), ("y", 1.0), ("diameter", 1.0), ("wz", 0.5)]
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect()];
+        let e = inline::<D2>(&grains, &[10.0, 10.0], 1).unwrap_err();
+        assert!(e.contains("`wz`") && e.contains("`w`"), "{e}");
         let f = write("x,y,z,diameter,w\n1,1,1,1,0.5\n");
         let e = read::<crate::geometry::D3>(f.path(), &[10.0; 3], 1).unwrap_err();
         assert!(e.contains("`w`") && e.contains("`wx`, `wy`, `wz`"), "{e}");
