@@ -248,12 +248,9 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
             // The first half kick uses forces of the first stage's κ (the run's start, or a
             // μ change; docs/exchange-format.md), the law kept as the base the stages scale.
             // An empty range (a protocol that ended with hard-grain stages) keeps the law's κ.
-            let factor = match ctx.stages.get(range.start).filter(|_| !range.is_empty()) {
-                Some((_, first)) => {
-                    StageNumerics::of_stage(scene, first, ctx.pressure).kappa_factor
-                }
-                None => 1.0,
-            };
+            let factor = range.clone().next().map_or(1.0, |k| {
+                StageNumerics::of_stage(scene, &ctx.stages[k].1, ctx.pressure).kappa_factor
+            });
             sys.law = law.with_kappa_scaled(factor);
             sys.init_forces();
             sys.law = law;

@@ -168,9 +168,8 @@ pub fn exchange(start: &Start) -> (Exchange, String) {
         row.push(num(start.inertia[i]));
         row.extend(start.velocity[i].iter().map(|&x| num(x)));
         if spinning {
-            let w = start.spin3(i);
-            let w = if d == 2 { &w[2..] } else { &w[..] };
-            row.extend(w.iter().map(|&x| num(x)));
+            // One component in 2D, three in 3D, as the columns.
+            row.extend(start.spin[i].iter().map(|&x| num(x)));
         }
         csv += &(row.join(",") + "\n");
     }
