@@ -1,12 +1,15 @@
 //! GRC08 §III: the consolidation curve of a run with pressure programs — Φ and z at the end
 //! of each pressure level, loading and unloading — its fit by GRC08 (9) (T.III), the CSV and
-//! the plot of Φ(P*) against the paper's fit.
+//! the plot of Φ(P*) against the paper's fit; along the cycle, z (Fig. 17), the moduli
+//! (Fig. 22) and the density correlations of §IV (I(k), Fig. 15; ξ and ξ', Fig. 16; (10)).
 
 use crate::common::contact_stiffness;
 use crate::run::{stage_file, STAGES};
 use anyhow::{Context, Result};
 use grainbench_comparisons::metrics::consolidation::{self, ConsolidationFit, ConsolidationLaw};
 use grainbench_comparisons::metrics::contact_changes::contact_changes;
+use grainbench_comparisons::metrics::density::{self, DensityCorrelations};
+use grainbench_comparisons::metrics::fractal_fit::FractalFit;
 use grainbench_comparisons::metrics::moduli::Moduli;
 use grainbench_comparisons::metrics::stiffness::NormalStiffness;
 use grainbench_comparisons::metrics::{analyze, Options};
@@ -30,6 +33,9 @@ pub struct Level {
     /// Elastic moduli of the stage-end state (`None` without its snapshot, or when they
     /// cannot be computed: the error is printed).
     pub moduli: Option<LevelModuli>,
+    /// GRC08 §IV: I(k), its fractal fit (d_F, ξ) and the holes (ξ' = ⟨R⟩_w) of the stage-end
+    /// state (`None` without its snapshot).
+    pub density: Option<DensityCorrelations>,
     /// How the stage ended (`equilibrium`, `time-limit`, …).
     pub end: String,
 }
@@ -98,6 +104,90 @@ impl LevelModuli {
     }
 }
 
+impl Level {
+    /// The fit of I(k) by GRC07 (28), where it finds a fractal range
+    /// ([`FractalFit::has_fractal_range`]; GRC08 Fig. 15: none left at P* = 1).
+    fn fractal(&self) -> Option<&FractalFit> {
+        let f = self.density.as_ref()?.fit.as_ref()?;
+        f.has_fractal_range().then_some(f)
+    }
+
+    /// d_F of the fractal fit of I(k).
+    pub fn d_f(&self) -> Option<f64> {
+        Some(self.fractal()?.model.d_f)
+    }
+
+    /// ξ of the fractal fit of I(k), in a.
+    pub fn xi(&self) -> Option<f64> {
+        Some(self.fractal()?.model.xi)
+    }
+
+    /// ξ' of GRC08 Fig. 16: the mass-weighted mean radius of gyration of the pores ⟨R⟩_w
+    /// (GRC07 (30)), in a.
+    pub fn pore_radius(&self) -> Option<f64> {
+        self.density.as_ref()?.holes.weighted_radius
+    }
+}
+
+/// The pressures at which GRC08 Fig. 15 shows I(k): P* = 0.01 (its Fig. 2), 0.178 (Fig. 3,
+/// "the largest one for which [the fractal range] is clearly observed") and 1, with the
+/// suffixes of their table keys.
+pub const SCATTERING_AT: [(f64, &str); 3] = [(0.01, "p001"), (0.178, "p0178"), (1.0, "p1")];
+
+/// The loading level at pressure `p` (within 1 %: 0.178 stands for 10^(−3/4)).
+fn loading_level(levels: &[Level], p: f64) -> Option<&Level> {
+    levels
+        .iter()
+        .find(|l| l.loading && (l.pressure / p - 1.0).abs() < 0.01)
+}
+
+/// GRC08 (10), ξ ∝ Φ^(−1/(2−d_F)), along the loading branch up to P* = 0.178 (beyond it
+/// I(k) has no fractal range to fit, GRC08 §IV): the least-squares slope of ln ξ against
+/// ln Φ over the levels with a fit, and the slope (10) predicts from their mean d_F.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlobScaling {
+    pub slope: f64,
+    pub predicted: f64,
+    pub levels: usize,
+}
+
+impl BlobScaling {
+    /// `None` with fewer than three fitted levels.
+    pub fn of(levels: &[Level]) -> Option<BlobScaling> {
+        let top = SCATTERING_AT[1].0 * 1.01;
+        let pts: Vec<(f64, f64, f64)> = levels
+            .iter()
+            .filter(|l| l.loading && l.pressure <= top)
+            .filter_map(|l| Some((l.phi, l.xi()?, l.d_f()?)))
+            .collect();
+        Self::fit(&pts)
+    }
+
+    /// The same from (Φ, ξ, d_F) of each level.
+    fn fit(levels: &[(f64, f64, f64)]) -> Option<BlobScaling> {
+        let pts: Vec<(f64, f64, f64)> = levels
+            .iter()
+            .map(|&(phi, xi, d)| (phi.ln(), xi.ln(), d))
+            .collect();
+        if pts.len() < 3 {
+            return None;
+        }
+        let n = pts.len() as f64;
+        let (mx, my) = (
+            pts.iter().map(|p| p.0).sum::<f64>() / n,
+            pts.iter().map(|p| p.1).sum::<f64>() / n,
+        );
+        let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+        let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+        let d_f = pts.iter().map(|p| p.2).sum::<f64>() / n;
+        (sxx > 0.0).then(|| BlobScaling {
+            slope: sxy / sxx,
+            predicted: -1.0 / (2.0 - d_f),
+            levels: pts.len(),
+        })
+    }
+}
+
 /// Whether a scene runs pressure programs (GRC08 §II.D.2 cycles).
 pub fn has_program(scene: &Scene) -> bool {
     scene
@@ -125,7 +215,7 @@ pub fn levels(scene: &Scene, steps: &serde_json::Value, dir: &Path) -> Result<Ve
             continue;
         };
         let path = dir.join(STAGES).join(stage_file(stage));
-        let (z, moduli) = if path.exists() {
+        let (z, moduli, density) = if path.exists() {
             let snap = Snapshot::read(&path)?;
             // The moduli of the linear law (GRC08), without the rigidity counts (~10 s a level).
             let law = contact_stiffness(scene, &snap).ok();
@@ -150,9 +240,9 @@ pub fn levels(scene: &Scene, steps: &serde_json::Value, dir: &Path) -> Result<Ve
                 }
                 _ => None,
             };
-            (Coordination::of(&a.metric_values()), moduli)
+            (Coordination::of(&a.metric_values()), moduli, a.density)
         } else {
-            (None, None)
+            (None, None, None)
         };
         out.push(Level {
             stage,
@@ -163,6 +253,7 @@ pub fn levels(scene: &Scene, steps: &serde_json::Value, dir: &Path) -> Result<Ve
                 .with_context(|| format!("stage {stage} report without a packing fraction"))?,
             z,
             moduli,
+            density,
             end: r["end"].as_str().unwrap_or("?").to_string(),
         });
     }
@@ -203,7 +294,62 @@ pub fn values(levels: &[Level], fit: Option<&ConsolidationFit>) -> Vec<(String, 
     {
         v.push(("phi_at_pmax".into(), top.phi));
     }
+    // GRC08 §IV: d_F, ξ and ξ' where Fig. 15 shows I(k), and the test of (10).
+    for (p, key) in SCATTERING_AT {
+        let Some(l) = loading_level(levels, p) else {
+            continue;
+        };
+        for (name, x) in [("d_F", l.d_f()), ("xi", l.xi()), ("R_w", l.pore_radius())] {
+            if let Some(x) = x {
+                v.push((format!("{name}_{key}"), x));
+            }
+        }
+    }
+    if let Some(b) = BlobScaling::of(levels) {
+        v.push(("xi_phi_slope".into(), b.slope));
+        v.push(("xi_phi_slope_eq10".into(), b.predicted));
+    }
     v
+}
+
+/// The seeds' mean I(k) at each pressure of [`SCATTERING_AT`] every seed reached with its
+/// state, and its fit (`None` for one seed: [`density::mean_scattering`] needs two).
+pub fn mean_scattering(seeds: &[SeedCurve]) -> Vec<(f64, &'static str, density::MeanScattering)> {
+    SCATTERING_AT
+        .iter()
+        .filter_map(|&(p, key)| {
+            let at: Vec<&DensityCorrelations> = seeds
+                .iter()
+                .filter_map(|s| loading_level(&s.levels, p)?.density.as_ref())
+                .collect();
+            if at.len() < seeds.len() {
+                return None;
+            }
+            Some((p, key, density::mean_scattering(&at)?))
+        })
+        .collect()
+}
+
+/// GRC07 §V.D fits I(k) averaged over samples (one 1400-disk sample is too small to fix ξ):
+/// d_F and ξ at each pressure of [`SCATTERING_AT`] from the fit of the seeds' mean I(k),
+/// standing for the seeds' own in the table.
+pub fn pooled_density(
+    means: &[(f64, &'static str, density::MeanScattering)],
+) -> Vec<(String, SeedStats)> {
+    let mut out = Vec::new();
+    for (_, key, m) in means {
+        if let Some(f) = m.fit.as_ref().filter(|f| f.has_fractal_range()) {
+            out.push((
+                format!("d_F_{key}"),
+                SeedStats::mean_curve_fit(f.model.d_f, Some(f.d_f_error), m.samples),
+            ));
+            out.push((
+                format!("xi_{key}"),
+                SeedStats::mean_curve_fit(f.model.xi, Some(f.xi_error), m.samples),
+            ));
+        }
+    }
+    out
 }
 
 /// The compression step of GRC08 T.IV, P* = 0.177 → 0.237 (10^(-3/4) → 10^(-5/8) of the
@@ -327,11 +473,11 @@ impl MeanCurve {
     }
 }
 
-/// Writes `consolidation.csv` (seed, branch, P*, Φ, z, z+, z−, z0, the moduli in K_N, end of
-/// every level) into `out`.
+/// Writes `consolidation.csv` (seed, branch, P*, Φ, z, z+, z−, z0, the moduli in K_N, d_F, ξ
+/// and ξ' in a, end of every level) into `out`.
 pub fn write_csv(out: &Path, seeds: &[SeedCurve]) -> Result<PathBuf> {
     let mut text = String::from(
-        "seed,branch,stage,pressure,phi,z,z_plus,z_minus,z_zero,B,G,B_V,G_V,B_R,E95,end\n",
+        "seed,branch,stage,pressure,phi,z,z_plus,z_minus,z_zero,B,G,B_V,G_V,B_R,E95,d_F,xi,R_w,end\n",
     );
     let cell = |x: Option<f64>| x.map(|v| v.to_string()).unwrap_or_default();
     for SeedCurve { seed, levels, .. } in seeds {
@@ -344,8 +490,9 @@ pub fn write_csv(out: &Path, seeds: &[SeedCurve]) -> Result<PathBuf> {
                 Some(m) => m.fields().map(cell).join(","),
                 None => ",,,,,".to_string(),
             };
+            let d = [l.d_f(), l.xi(), l.pore_radius()].map(cell).join(",");
             text.push_str(&format!(
-                "{seed},{},{},{},{},{z},{m},{}\n",
+                "{seed},{},{},{},{},{z},{m},{d},{}\n",
                 if l.loading { "loading" } else { "unloading" },
                 l.stage,
                 l.pressure,
@@ -613,6 +760,78 @@ pub fn plot_moduli(out: &Path, seeds: &[SeedCurve]) -> Result<Vec<PathBuf>> {
     )
 }
 
+/// GRC08 Fig. 16 (and ξ of Fig. 15's fits): ξ' = ⟨R⟩_w, the pores' mean radius of gyration,
+/// and ξ of the fractal fit of I(k) along the cycle, mean over the seeds:
+/// `consolidation-xi.svg` and `.png` in `out`; nothing without the levels' states.
+pub fn plot_blob_size(out: &Path, seeds: &[SeedCurve]) -> Result<Vec<PathBuf>> {
+    let picks: [Pick; 2] = [
+        ("ξ' (pores' radius of gyration)", Level::pore_radius),
+        ("ξ (fit of I(k))", Level::xi),
+    ];
+    let curves = branch_curves(seeds, &picks, true);
+    let (file, y) = ("consolidation-xi", "length / a");
+    cycle_plot(out, file, "Blob size", y, seeds.len(), &curves, |spec| {
+        spec.y_axis = plots::Axis::Log;
+    })
+}
+
+/// GRC08 Fig. 15: I(k) at P* = 0.01, 0.178 and 1 on the loading branch — the seeds' mean over
+/// its standard-error band with its fit by GRC07 (28) (`means`, [`mean_scattering`]), or one
+/// seed's own — into `consolidation-ik.svg` and `.png` in `out`; nothing without the states.
+pub fn plot_scattering(
+    out: &Path,
+    seeds: &[SeedCurve],
+    means: &[(f64, &'static str, density::MeanScattering)],
+) -> Result<Vec<PathBuf>> {
+    type Curve = (String, Vec<(f64, f64)>, Option<Vec<(f64, f64, f64)>>);
+    let mut owned: Vec<Curve> = Vec::new();
+    let fit_curve = |p: f64, f: &FractalFit| -> Curve {
+        let curve = f.curve(60);
+        let label = format!(
+            "P* = {p}: GRC07 (28), d_F = {:.2}, ξ = {:.2} a",
+            f.model.d_f, f.model.xi
+        );
+        (label, curve, None)
+    };
+    for (p, _) in SCATTERING_AT {
+        if let Some((_, _, m)) = means.iter().find(|(q, _, _)| *q == p) {
+            let s = &m.scattering;
+            let label = format!("P* = {p}, mean of {} seeds ± s.e.", m.samples);
+            owned.push((label, s.points(), Some(s.error_band())));
+            let fit = m.fit.as_ref().filter(|f| f.has_fractal_range());
+            owned.extend(fit.map(|f| fit_curve(p, f)));
+        } else if let [one] = seeds {
+            let Some(l) = loading_level(&one.levels, p) else {
+                continue;
+            };
+            let Some(d) = &l.density else { continue };
+            let label = format!("P* = {p}, seed {}", one.seed);
+            owned.push((label, d.scattering.points(), None));
+            owned.extend(l.fractal().map(|f| fit_curve(p, f)));
+        }
+    }
+    if owned.is_empty() {
+        return Ok(Vec::new());
+    }
+    let series: Vec<plots::Series> = owned
+        .iter()
+        .map(|(l, p, band)| match band {
+            Some(b) => plots::Series::new(l, p).with_band(b),
+            None => plots::Series::new(l, p),
+        })
+        .collect();
+    let mut spec = plots::LinePlot::new(
+        "Scattering function I(k) along the loading branch",
+        "k a",
+        "I(k) / a²",
+        &series,
+    );
+    spec.x_axis = plots::Axis::Log;
+    spec.y_axis = plots::Axis::Log;
+    let files = plots::line_plot(&out.join("consolidation-ik"), &spec)?;
+    Ok(vec![files.svg, files.png])
+}
+
 fn curve(law: &ConsolidationLaw, from: f64, to: f64) -> Vec<(f64, f64)> {
     (0..=80)
         .map(|q| from * (to / from).powf(q as f64 / 80.0))
@@ -632,6 +851,7 @@ mod tests {
             phi,
             z: None,
             moduli: None,
+            density: None,
             end: "equilibrium".into(),
         }
     }
@@ -649,6 +869,20 @@ mod tests {
         let v = values(&l, fit_loading(&l).as_ref());
         // Two points: no fit, but Φ at the top level.
         assert_eq!(v, vec![("phi_at_pmax".to_string(), 0.52)]);
+    }
+
+    /// GRC08 (10) on levels that obey it exactly, ξ = 3 Φ^(−1/(2−1.5)) = 3 Φ^(−2): the fitted
+    /// slope is the predicted −2; two levels are too few.
+    #[test]
+    fn blob_scaling_recovers_grc08_eq10() {
+        let levels: Vec<(f64, f64, f64)> = [0.52, 0.55, 0.6, 0.65]
+            .iter()
+            .map(|&phi: &f64| (phi, 3.0 * phi.powf(-2.0), 1.5))
+            .collect();
+        let b = BlobScaling::fit(&levels).unwrap();
+        assert!((b.slope + 2.0).abs() < 1e-12 && (b.predicted + 2.0).abs() < 1e-12);
+        assert_eq!(b.levels, 4);
+        assert!(BlobScaling::fit(&levels[..2]).is_none());
     }
 
     #[test]

@@ -6,7 +6,6 @@ use crate::common::seed_list;
 use crate::consolidation;
 use crate::run::{run, RunFlags, CHECKPOINT};
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::metrics::density_field::Scattering;
 use grainbench_comparisons::metrics::fractal_fit::FractalFit;
 use grainbench_comparisons::metrics::{analyze, density, Analysis};
 use grainbench_comparisons::report::reproduction::{self, SeedStats};
@@ -166,6 +165,8 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     // parameters stand for the seeds' own.
     let mean = consolidation::MeanCurve::of(&curves);
     let mut pooled = mean.as_ref().map(|m| m.pooled()).unwrap_or_default();
+    let cycle_ik = consolidation::mean_scattering(&curves);
+    pooled.extend(consolidation::pooled_density(&cycle_ik));
     let densities: Vec<_> = analyses.iter().filter_map(|a| a.density.as_ref()).collect();
     let mean_ik = (densities.len() == analyses.len())
         .then(|| density::mean_scattering(&densities))
@@ -225,6 +226,14 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             Ok(files) => plotted.extend(files),
             Err(e) => eprintln!("warning: no moduli plot: {e}"),
         }
+        match consolidation::plot_scattering(&out, &curves, &cycle_ik) {
+            Ok(files) => plotted.extend(files),
+            Err(e) => eprintln!("warning: no I(k) plot of the cycle: {e}"),
+        }
+        match consolidation::plot_blob_size(&out, &curves) {
+            Ok(files) => plotted.extend(files),
+            Err(e) => eprintln!("warning: no blob-size plot: {e}"),
+        }
     }
     let svgs: Vec<PathBuf> = plotted
         .iter()
@@ -270,6 +279,8 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             "consolidation.svg",
             "consolidation-z.svg",
             "consolidation-moduli.svg",
+            "consolidation-ik.svg",
+            "consolidation-xi.svg",
             "consolidation.csv",
         ] {
             let (from, to) = (out.join(f), path.with_file_name(f));
@@ -352,43 +363,24 @@ pub(crate) fn write_plots(
     type Curve = (String, Vec<(f64, f64)>, Option<Vec<(f64, f64, f64)>>);
     let mut ik: Vec<Curve> = Vec::new();
     let fit_curve = |who: &str, f: &FractalFit| -> Curve {
-        let curve = (0..=60)
-            .map(|q| f.k_min * (f.k_max / f.k_min).powf(q as f64 / 60.0))
-            .map(|k| (k, f.model.eval(k)))
-            .collect();
+        let curve = f.curve(60);
         let label = format!(
             "{who}: GRC07 (28), d_F = {:.2}, ξ = {:.2} a",
             f.model.d_f, f.model.xi
         );
         (label, curve, None)
     };
-    let pairs = |s: &Scattering| -> Vec<(f64, f64)> {
-        s.k.iter()
-            .copied()
-            .zip(s.intensity.iter().copied())
-            .collect()
-    };
     for (a, l) in analyses.iter().zip(labels) {
         let Some(d) = &a.density else { continue };
-        ik.push((l.clone(), pairs(&d.scattering), None));
+        ik.push((l.clone(), d.scattering.points(), None));
         if let (None, Some(f)) = (mean_ik, &d.fit) {
             ik.push(fit_curve(l, f));
         }
     }
     if let Some(m) = mean_ik {
         let s = &m.scattering;
-        let band = (0..s.k.len())
-            .map(|q| {
-                (
-                    s.k[q],
-                    s.intensity[q] - s.error[q],
-                    s.intensity[q] + s.error[q],
-                )
-            })
-            .filter(|b| b.1 > 0.0)
-            .collect();
         let label = format!("mean of {} seeds ± s.e.", m.samples);
-        ik.push((label, pairs(s), Some(band)));
+        ik.push((label, s.points(), Some(s.error_band())));
         if let Some(f) = &m.fit {
             ik.push(fit_curve("mean", f));
         }

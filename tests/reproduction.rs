@@ -189,40 +189,53 @@ fn grc08_cycle_ci_consolidates_in_its_bands() {
     }
     assert!(dir.path().join("consolidation.svg").exists());
     let csv = std::fs::read_to_string(dir.path().join("consolidation.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<&str>> = csv
         .lines()
         .skip(1)
         .map(|l| l.split(',').collect())
         .collect();
-    let num = |r: &Vec<&str>, k: usize| r[k].parse::<f64>().unwrap();
+    let num = |r: &Vec<&str>, k: &str| r[col(k)].parse::<f64>().unwrap();
     let (loading, unloading): (Vec<_>, Vec<_>) = rows.iter().partition(|r| r[1] == "loading");
     assert_eq!((loading.len(), unloading.len()), (14, 14), "{csv}");
     for r in &rows {
-        assert_eq!(r[15], "equilibrium", "{csv}");
+        assert_eq!(r[col("end")], "equilibrium", "{csv}");
         // GRC08 §VI: every level's moduli, positive, with the Voigt bound above them.
-        let (b, g, b_v) = (num(r, 9), num(r, 10), num(r, 11));
+        let (b, g, b_v) = (num(r, "B"), num(r, "G"), num(r, "B_V"));
         assert!(
             b > 0.0 && g > 0.0 && b_v > b,
             "moduli of every level: {csv}"
         );
-        assert!(num(r, 5) > 2.0, "z of every level: {csv}");
+        assert!(num(r, "z") > 2.0, "z of every level: {csv}");
         // GRC08 Fig. 17: compressive and tensile contacts both present at every level.
         assert!(
-            num(r, 6) > 0.5 && num(r, 7) > 0.1,
+            num(r, "z_plus") > 0.5 && num(r, "z_minus") > 0.1,
             "z+ and z− of every level: {csv}"
         );
+        // GRC08 Fig. 16: every level's pores measured.
+        assert!(num(r, "R_w") > 0.0, "ξ' of every level: {csv}");
     }
     assert!(dir.path().join("consolidation-z.svg").exists());
     assert!(dir.path().join("consolidation-moduli.svg").exists());
+    assert!(dir.path().join("consolidation-ik.svg").exists());
+    assert!(dir.path().join("consolidation-xi.svg").exists());
     for w in loading.windows(2) {
-        assert!(num(w[0], 3) < num(w[1], 3), "{csv}");
+        assert!(num(w[0], "pressure") < num(w[1], "pressure"), "{csv}");
         assert!(
-            num(w[1], 4) >= num(w[0], 4) - 1e-6,
+            num(w[1], "phi") >= num(w[0], "phi") - 1e-6,
             "Φ decreased on loading: {csv}"
         );
     }
-    let top = num(loading.last().unwrap(), 4);
-    let end = num(unloading.last().unwrap(), 4);
+    // GRC08 §IV: the collapse fills the largest pores, so ξ' shrinks from the loose start to
+    // the dense end of the loading branch.
+    let (first, last) = (loading.first().unwrap(), loading.last().unwrap());
+    assert!(
+        num(last, "R_w") < 0.5 * num(first, "R_w"),
+        "ξ' along the loading branch: {csv}"
+    );
+    let top = num(loading.last().unwrap(), "phi");
+    let end = num(unloading.last().unwrap(), "phi");
     assert!(top - 0.01 < end && end <= top, "unloading: Φ {top} → {end}");
 }
 

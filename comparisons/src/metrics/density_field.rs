@@ -93,6 +93,29 @@ pub struct Scattering {
     pub count: Vec<usize>,
 }
 
+impl Scattering {
+    /// (k, I) of the shells with I > 0, as a log–log plot takes them.
+    pub fn points(&self) -> Vec<(f64, f64)> {
+        self.k
+            .iter()
+            .zip(&self.intensity)
+            .filter(|(_, i)| **i > 0.0)
+            .map(|(k, i)| (*k, *i))
+            .collect()
+    }
+
+    /// (k, I − s.e., I + s.e.) of the shells whose lower edge stays above zero.
+    pub fn error_band(&self) -> Vec<(f64, f64, f64)> {
+        (0..self.k.len())
+            .map(|q| {
+                let (i, e) = (self.intensity[q], self.error[q]);
+                (self.k[q], i - e, i + e)
+            })
+            .filter(|b| b.1 > 0.0)
+            .collect()
+    }
+}
+
 /// GRC07 (25): I(k) = |χ̂(k)|²/A with χ̂(k) = ∫ χ(r) e^{−ik·r} dr, up to |k| ≤ `k_max`.
 pub fn scattering(mesh: &Mesh, k_max: f64) -> Scattering {
     let (nx, ny) = (mesh.nx, mesh.ny);
@@ -172,6 +195,18 @@ pub fn scattering(mesh: &Mesh, k_max: f64) -> Scattering {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn plot_points_leave_out_what_a_log_axis_cannot_show() {
+        let s = Scattering {
+            k: vec![0.5, 1.0, 2.0],
+            intensity: vec![4.0, 0.0, 1.0],
+            error: vec![1.0, 0.5, 2.0],
+            count: vec![4, 8, 12],
+        };
+        assert_eq!(s.points(), vec![(0.5, 4.0), (2.0, 1.0)]);
+        assert_eq!(s.error_band(), vec![(0.5, 3.0, 5.0)]);
+    }
 
     /// J1 by its series (x < 20 here).
     fn bessel_j1(x: f64) -> f64 {

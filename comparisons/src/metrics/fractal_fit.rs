@@ -99,6 +99,24 @@ pub struct FractalFit {
     pub rms_log_residual: f64,
 }
 
+impl FractalFit {
+    /// Whether the fit describes a fractal range a ≪ 2π/k ≪ ξ at all (GRC07 (26), GRC08 §IV):
+    /// ξ above the grain size and 1 < d_F < 2. A dense, homogeneous packing's flat, low I(k)
+    /// (GRC08 Fig. 15, P* = 1) still fits the model, with ξ below a or d_F above 2.
+    pub fn has_fractal_range(&self) -> bool {
+        let m = &self.model;
+        m.xi > 1.0 && m.d_f > 1.0 && m.d_f < 2.0
+    }
+
+    /// The fitted GRC07 (28) at `n + 1` log-spaced k over the fitted range, for a plot.
+    pub fn curve(&self, n: usize) -> Vec<(f64, f64)> {
+        (0..=n)
+            .map(|q| self.k_min * (self.k_max / self.k_min).powf(q as f64 / n as f64))
+            .map(|k| (k, self.model.eval(k)))
+            .collect()
+    }
+}
+
 /// Least squares of ln I: parameters (√constant, ln amplitude, d_F, ln ξ), so that the
 /// constant and the amplitude stay positive and every decade of I weighs alike.
 fn model_of(p: &Vector4<f64>) -> FractalModel {
@@ -245,6 +263,29 @@ mod tests {
         assert!((f.model.d_f - 1.6).abs() < 1e-4, "{f:?}");
         assert!((f.model.xi - 7.0).abs() < 1e-3, "{f:?}");
         assert!(f.rms_log_residual < 1e-6, "{f:?}");
+        assert!(f.has_fractal_range());
+        let curve = f.curve(10);
+        assert_eq!(
+            (curve.len(), curve[0].0, curve[10].0),
+            (11, f.k_min, f.k_max)
+        );
+        assert!(curve
+            .iter()
+            .all(|(k, y)| (y - f.model.eval(*k)).abs() < 1e-12));
+        // What a dense CI packing's flat I(k) fitted to (GRC08 Fig. 15, P* = 1): no range.
+        let blob_below_a = FractalFit {
+            model: FractalModel {
+                xi: 0.41,
+                d_f: 1.6,
+                ..truth
+            },
+            ..f.clone()
+        };
+        let beyond_the_plane = FractalFit {
+            model: FractalModel { d_f: 2.36, ..truth },
+            ..f.clone()
+        };
+        assert!(!blob_below_a.has_fractal_range() && !beyond_the_plane.has_fractal_range());
         // ℓ inverts the amplitude: Φ 2π ℓ² Γ(d_F) (ξ/ℓ)^{d_F}.
         let l = f.model.ell(0.4).expect("ell");
         let back = 0.4 * 2.0 * std::f64::consts::PI * l * l * gamma(1.6) * (7.0 / l).powf(1.6);
