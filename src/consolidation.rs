@@ -783,16 +783,9 @@ pub fn plot_scattering(
     seeds: &[SeedCurve],
     means: &[(f64, &'static str, density::MeanScattering)],
 ) -> Result<Vec<PathBuf>> {
-    type Curve = (String, Vec<(f64, f64)>, Option<Vec<(f64, f64, f64)>>);
-    let mut owned: Vec<Curve> = Vec::new();
-    let fit_curve = |p: f64, f: &FractalFit| -> Curve {
-        let curve = f.curve(60);
-        let label = format!(
-            "P* = {p}: GRC07 (28), d_F = {:.2}, ξ = {:.2} a",
-            f.model.d_f, f.model.xi
-        );
-        (label, curve, None)
-    };
+    let mut owned: Vec<plots::OwnedCurve> = Vec::new();
+    let fit_curve =
+        |p: f64, f: &FractalFit| (format!("P* = {p}: {}", f.legend()), f.curve(60), None);
     for (p, _) in SCATTERING_AT {
         if let Some((_, _, m)) = means.iter().find(|(q, _, _)| *q == p) {
             let s = &m.scattering;
@@ -813,22 +806,8 @@ pub fn plot_scattering(
     if owned.is_empty() {
         return Ok(Vec::new());
     }
-    let series: Vec<plots::Series> = owned
-        .iter()
-        .map(|(l, p, band)| match band {
-            Some(b) => plots::Series::new(l, p).with_band(b),
-            None => plots::Series::new(l, p),
-        })
-        .collect();
-    let mut spec = plots::LinePlot::new(
-        "Scattering function I(k) along the loading branch",
-        "k a",
-        "I(k) / a²",
-        &series,
-    );
-    spec.x_axis = plots::Axis::Log;
-    spec.y_axis = plots::Axis::Log;
-    let files = plots::line_plot(&out.join("consolidation-ik"), &spec)?;
+    let title = "Scattering function I(k) along the loading branch";
+    let files = plots::scattering(&out.join("consolidation-ik"), title, &owned)?;
     Ok(vec![files.svg, files.png])
 }
 

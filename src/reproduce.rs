@@ -360,16 +360,9 @@ pub(crate) fn write_plots(
     }
     // GRC07 Fig. 23: I(k) of each seed and its fit by GRC07 (28), 2D cohesive packings; over
     // seeds, their mean and its fit.
-    type Curve = (String, Vec<(f64, f64)>, Option<Vec<(f64, f64, f64)>>);
-    let mut ik: Vec<Curve> = Vec::new();
-    let fit_curve = |who: &str, f: &FractalFit| -> Curve {
-        let curve = f.curve(60);
-        let label = format!(
-            "{who}: GRC07 (28), d_F = {:.2}, ξ = {:.2} a",
-            f.model.d_f, f.model.xi
-        );
-        (label, curve, None)
-    };
+    let mut ik: Vec<plots::OwnedCurve> = Vec::new();
+    let fit_curve =
+        |who: &str, f: &FractalFit| (format!("{who}: {}", f.legend()), f.curve(60), None);
     for (a, l) in analyses.iter().zip(labels) {
         let Some(d) = &a.density else { continue };
         ik.push((l.clone(), d.scattering.points(), None));
@@ -386,17 +379,7 @@ pub(crate) fn write_plots(
         }
     }
     if !ik.is_empty() {
-        let s: Vec<plots::Series> = ik
-            .iter()
-            .map(|(l, p, band)| match band {
-                Some(b) => plots::Series::new(l, p).with_band(b),
-                None => plots::Series::new(l, p),
-            })
-            .collect();
-        let mut plot = plots::LinePlot::new("Scattering function I(k)", "k a", "I(k) / a²", &s);
-        plot.x_axis = plots::Axis::Log;
-        plot.y_axis = plots::Axis::Log;
-        match plots::line_plot(&out.join("ik"), &plot) {
+        match plots::scattering(&out.join("ik"), "Scattering function I(k)", &ik) {
             Ok(f) => written.extend([f.svg, f.png]),
             Err(e) => eprintln!("warning: no I(k) plot: {e}"),
         }

@@ -108,6 +108,14 @@ impl FractalFit {
         m.xi > 1.0 && m.d_f > 1.0 && m.d_f < 2.0
     }
 
+    /// "GRC07 (28), d_F = …, ξ = … a", a plot's legend for the fit.
+    pub fn legend(&self) -> String {
+        format!(
+            "GRC07 (28), d_F = {:.2}, ξ = {:.2} a",
+            self.model.d_f, self.model.xi
+        )
+    }
+
     /// The fitted GRC07 (28) at `n + 1` log-spaced k over the fitted range, for a plot.
     pub fn curve(&self, n: usize) -> Vec<(f64, f64)> {
         (0..=n)

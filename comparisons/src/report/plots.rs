@@ -401,6 +401,28 @@ pub fn line_plot(out: &Path, plot: &LinePlot) -> Result<PlotFiles, PlotError> {
     write_plot(out, &spec)
 }
 
+/// A curve that owns its data (label, points, optional band), as plots assembled in a loop
+/// collect them.
+pub type OwnedCurve = (String, Vec<(f64, f64)>, Option<Vec<Band>>);
+
+/// The scattering function I(k) against k a on log–log axes (GRC07 Fig. 23, GRC08 Fig. 15).
+pub fn scattering(out: &Path, title: &str, curves: &[OwnedCurve]) -> Result<PlotFiles, PlotError> {
+    let series: Vec<Series> = curves
+        .iter()
+        .map(|(label, points, band)| {
+            let s = Series::new(label, points);
+            match band {
+                Some(b) => s.with_band(b),
+                None => s,
+            }
+        })
+        .collect();
+    let mut plot = LinePlot::new(title, "k a", "I(k) / a²", &series);
+    plot.x_axis = Axis::Log;
+    plot.y_axis = Axis::Log;
+    line_plot(out, &plot)
+}
+
 // ---------------------------------------------------------------------------------------------
 
 struct Curve<'a> {
