@@ -188,12 +188,20 @@ impl BlobScaling {
     }
 }
 
-/// Whether a scene runs pressure programs (GRC08 §II.D.2 cycles).
+/// Whether a scene runs pressure programs (GRC08 §II.D.2 cycles; the stepped loading of
+/// GRC07 series B; AR07's quasi-static compression).
 pub fn has_program(scene: &Scene) -> bool {
     scene
         .protocol
         .iter()
         .any(|s| matches!(s, Step::PressureProgram { .. }))
+}
+
+/// Whether `reproduce` analyses the scene's levels as a consolidation curve (GRC08 §III: the
+/// fit of (9), I(k) along the path): a pressure program reproducing a GRC08 state
+/// (`state_key`). Other states reached by a program are judged at its end only.
+pub fn is_cycle(scene: &Scene, state_key: &str) -> bool {
+    has_program(scene) && state_key.starts_with("grc08-")
 }
 
 /// The levels of the scene's pressure programs, from the run's stage reports (`steps`, as in
@@ -833,6 +841,19 @@ mod tests {
             density: None,
             end: "equilibrium".into(),
         }
+    }
+
+    #[test]
+    fn only_grc08_programs_are_analysed_as_cycles() {
+        let scene = |name: &str| grainbench_engine::library::scene(name).unwrap().unwrap();
+        let cycle = scene("grc08-cycle-rr-ci");
+        let stepped = scene("grc07-type2-phi026-stepped");
+        let at_once = scene("grc07-type2-phi026");
+        assert!(is_cycle(&cycle, cycle.paper_state.as_deref().unwrap()));
+        // Series B loaded in steps runs a program but reproduces GRC07 T.V at its end.
+        assert!(has_program(&stepped));
+        assert!(!is_cycle(&stepped, stepped.paper_state.as_deref().unwrap()));
+        assert!(!is_cycle(&at_once, "grc07-type2-phi026"));
     }
 
     #[test]

@@ -150,7 +150,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     let mut values: Vec<Vec<(String, f64)>> = analyses.iter().map(|a| a.metric_values()).collect();
     // GRC08 §III: the consolidation curve of each seed and its fit by GRC08 (9).
     let mut curves = Vec::new();
-    if consolidation::has_program(&base) {
+    if consolidation::is_cycle(&base, &state_key) {
         for (r, v) in runs.iter().zip(values.iter_mut()) {
             let mut scene = base.clone();
             scene.seed = r.seed;

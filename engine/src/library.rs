@@ -65,6 +65,8 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "grc07-type1-phi052-mu05-rr",
     "grc07-type2-phi026",
     "grc07-type2-phi026-rr",
+    "grc07-type2-phi026-stepped",
+    "grc07-type2-phi026-rr-stepped",
     "grc07-type2-phi026-p0",
     "grc07-type2-phi026-rr-p0",
     "grc07-type2-phi036",
