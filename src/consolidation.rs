@@ -197,6 +197,26 @@ pub fn has_program(scene: &Scene) -> bool {
         .any(|s| matches!(s, Step::PressureProgram { .. }))
 }
 
+/// The stage that ends the first program level at `pressure` (relative tolerance 1e-9), if
+/// the scene has one.
+pub fn program_stage(scene: &Scene, pressure: f64) -> Option<usize> {
+    scene
+        .stages()
+        .into_iter()
+        .enumerate()
+        .find_map(|(stage, (k, step))| {
+            let program = matches!(scene.protocol[k], Step::PressureProgram { .. });
+            match step {
+                Step::Compress { pressure: p, .. }
+                    if program && (p - pressure).abs() <= 1e-9 * pressure.abs() =>
+                {
+                    Some(stage)
+                }
+                _ => None,
+            }
+        })
+}
+
 /// Whether `reproduce` analyses the scene's levels as a consolidation curve (GRC08 §III: the
 /// fit of (9), I(k) along the path): a pressure program reproducing a GRC08 state
 /// (`state_key`). Other states reached by a program are judged at its end only.
@@ -841,6 +861,22 @@ mod tests {
             density: None,
             end: "equilibrium".into(),
         }
+    }
+
+    #[test]
+    fn program_levels_are_found_by_pressure() {
+        let qs = grainbench_engine::library::scene("ar07-D-QS")
+            .unwrap()
+            .unwrap();
+        // Melt, compression to 1 kPa, then the levels 1, √10, 10, … kPa.
+        assert_eq!(program_stage(&qs, 1.0), Some(2));
+        assert_eq!(program_stage(&qs, 10.0), Some(4));
+        assert_eq!(program_stage(&qs, 100.0), Some(6));
+        assert_eq!(program_stage(&qs, 5.0), None);
+        let d = grainbench_engine::library::scene("ar07-D")
+            .unwrap()
+            .unwrap();
+        assert_eq!(program_stage(&d, 1.0), None);
     }
 
     #[test]

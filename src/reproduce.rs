@@ -4,7 +4,7 @@
 
 use crate::common::seed_list;
 use crate::consolidation;
-use crate::run::{run, RunFlags, CHECKPOINT};
+use crate::run::{run, stage_file, RunFlags, CHECKPOINT, STAGES};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::metrics::fractal_fit::FractalFit;
 use grainbench_comparisons::metrics::{analyze, density, Analysis};
@@ -201,14 +201,19 @@ pub fn reproduce(a: &Args) -> Result<i32> {
                 .with_context(|| format!("building the table of {step_state}"))?,
         )
     };
-    let markdown = match &step_table {
-        Some(t) => format!("{}\n{}", table.to_markdown(), t.to_markdown()),
-        None => table.to_markdown(),
-    };
+    let level_tables = level_tables(&base, &state_key, &runs, &out)?;
+    let mut markdown = table.to_markdown();
+    for t in step_table.iter().chain(&level_tables) {
+        markdown = format!("{markdown}\n{}", t.to_markdown());
+    }
     std::fs::create_dir_all(&out)?;
     snapshot::write_atomic(&out.join("report.md"), markdown.as_bytes())?;
     snapshot::write_atomic(&out.join("report.csv"), table.to_csv().as_bytes())?;
     snapshot::write_atomic(&out.join("report.json"), table.to_json().as_bytes())?;
+    for t in &level_tables {
+        let file = out.join(format!("report-{}.json", t.state));
+        snapshot::write_atomic(&file, t.to_json().as_bytes())?;
+    }
     let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
     let mut plotted = write_plots(&out, &labels, &analyses, true, mean_ik.as_ref());
     if !curves.is_empty() {
@@ -267,6 +272,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         let tables = Tables {
             main: &table,
             step: step_table.as_ref(),
+            levels: &level_tables,
         };
         let path = record(a, &scene_name, &base, &state_key, &runs, &values, tables)?;
         println!("recorded   {}", path.display());
@@ -391,6 +397,43 @@ pub(crate) fn write_plots(
 struct Tables<'a> {
     main: &'a reproduction::Reproduction,
     step: Option<&'a reproduction::Reproduction>,
+    levels: &'a [reproduction::Reproduction],
+}
+
+/// The tables of the states reached at levels of `state_key`'s pressure program
+/// ([`paper::levels_of`]: AR07 T.III's QS rows), each from the seeds' stage-end snapshots of
+/// that level.
+fn level_tables(
+    scene: &grainbench_engine::Scene,
+    state_key: &str,
+    runs: &[SeedRun],
+    out: &Path,
+) -> Result<Vec<reproduction::Reproduction>> {
+    let mut tables = Vec::new();
+    for (state, pressure) in paper::levels_of(state_key) {
+        let Some(stage) = consolidation::program_stage(scene, pressure) else {
+            bail!(
+                "golden/paper-values.toml: {state} is the level P = {pressure} of {state_key}, but scene {} has no program level at that pressure; fix `level_of` or the scene's `pressure-program`",
+                scene.name
+            );
+        };
+        let mut seeds = Vec::new();
+        for r in runs {
+            let path = out
+                .join(format!("seed-{}", r.seed))
+                .join(STAGES)
+                .join(stage_file(stage));
+            let snap = Snapshot::read(&path).with_context(|| {
+                format!("the state of {state} (stage {stage}); run the seed again to write it")
+            })?;
+            seeds.push(analyze(&snap, &Default::default()).metric_values());
+        }
+        tables.push(
+            reproduction::build(state, &seeds)
+                .with_context(|| format!("building the table of {state}"))?,
+        );
+    }
+    Ok(tables)
 }
 
 /// Writes golden/<scene>/rust.json: the command, the scene as run (`settings`, seed aside, with
@@ -433,6 +476,9 @@ fn record(
     if let Some(step) = tables.step {
         doc["step_table"] = serde_json::to_value(step)?;
     }
+    if !tables.levels.is_empty() {
+        doc["level_tables"] = serde_json::to_value(tables.levels)?;
+    }
     snapshot::write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     Ok(path)
 }
@@ -464,4 +510,56 @@ pub(crate) fn pf_plot(
 fn points(xy: Option<(&Vec<f64>, &Vec<f64>)>) -> Vec<(f64, f64)> {
     xy.map(|(x, y)| x.iter().copied().zip(y.iter().copied()).collect())
         .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A seed whose stage-end state at `stage` is `snap`, written where `reproduce` keeps it.
+    fn seed_with_stage(out: &Path, seed: u64, stage: usize, snap: &Snapshot) -> SeedRun {
+        let dir = out.join(format!("seed-{seed}")).join(STAGES);
+        std::fs::create_dir_all(&dir).unwrap();
+        snap.write(&dir.join(stage_file(stage))).unwrap();
+        SeedRun {
+            seed,
+            snapshot: snap.clone(),
+            wall_seconds: 0.0,
+            status: "equilibrium".into(),
+            steps: serde_json::Value::Null,
+            threads: 1,
+            contacts_at_threshold: Some(0),
+        }
+    }
+
+    #[test]
+    fn qs_levels_are_judged_on_their_stage_states() {
+        let scene = library::scene("ar07-D-QS").unwrap().unwrap();
+        let start = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/reference-inputs/starts/ar07-D-10kPa-n1372.snap.json"
+        );
+        let snap = Snapshot::read(Path::new(start)).unwrap();
+        let phi = analyze(&snap, &Default::default()).packing_fraction;
+        let out = tempfile::tempdir().unwrap();
+        // The 10 kPa level ends stage 4 (melt, 1 kPa, then 1, √10, 10 kPa).
+        let runs = vec![seed_with_stage(out.path(), 1, 4, &snap)];
+        let tables = level_tables(&scene, "ar07-D-QS-100kPa", &runs, out.path()).unwrap();
+        assert_eq!(tables.len(), 1);
+        assert_eq!(tables[0].state, "ar07-D-QS-10kPa");
+        let row = tables[0].rows.iter().find(|r| r.metric == "phi").unwrap();
+        assert_eq!(row.ours.as_ref().unwrap().mean, phi);
+        // No level states for a state without a program's levels.
+        assert!(level_tables(&scene, "ar07-D", &runs, out.path())
+            .unwrap()
+            .is_empty());
+        // A seed without that level's state: the error names the state and the stage.
+        let missing = tempfile::tempdir().unwrap();
+        let err = level_tables(&scene, "ar07-D-QS-100kPa", &runs, missing.path()).unwrap_err();
+        let msg = format!("{err:#}");
+        assert!(
+            msg.contains("ar07-D-QS-10kPa") && msg.contains("stage 4"),
+            "{msg}"
+        );
+    }
 }

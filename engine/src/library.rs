@@ -32,6 +32,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "ar07-D",
     "ar07-D-10kPa",
     "ar07-D-QS",
+    "ar07-D-QS-ci",
     "ar07-D-ci",
     "ar07-Z",
     "ar07-Z-ci",

@@ -55,8 +55,22 @@ pub struct StateValues {
     /// Caveats about the state as a whole.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// Where the state is a level of another state's pressure program (AR07 T.III's QS rows):
+    /// it is judged on that level's stage-end snapshot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub level_of: Option<LevelOf>,
     /// Metric key (see [`METRIC_KEYS`]) → published value.
     pub values: BTreeMap<String, PaperValue>,
+}
+
+/// A level of another state's pressure program.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LevelOf {
+    /// The state whose scene runs the program (`"ar07-D-QS-100kPa"`).
+    pub state: String,
+    /// The level's pressure, in the scene's pressure unit (P_ref: 1 kPa in AR07's scenes).
+    pub pressure: f64,
 }
 
 /// Every metric key the data file may use, with its meaning. The first block is the project's
@@ -232,6 +246,18 @@ pub fn all_states() -> &'static BTreeMap<String, StateValues> {
 /// The published values for `state` (e.g. `"ar07-D"`), if the file has it.
 pub fn paper_values(state: &str) -> Option<&'static StateValues> {
     all_states().get(state)
+}
+
+/// The states reached at levels of `state`'s pressure program, with their level pressures, in
+/// the order of the file's state names.
+pub fn levels_of(state: &str) -> Vec<(&'static str, f64)> {
+    all_states()
+        .iter()
+        .filter_map(|(name, s)| {
+            let l = s.level_of.as_ref()?;
+            (l.state == state).then_some((name.as_str(), l.pressure))
+        })
+        .collect()
 }
 
 /// The names of all states, sorted.
@@ -413,6 +439,22 @@ mod tests {
             let two = sum("_II");
             assert!((one - 1.0).abs() < 0.01, "{state} I: {one}");
             assert!((two - 1.0).abs() < 0.01, "{state} II: {two}");
+        }
+    }
+
+    #[test]
+    fn qs_rows_are_levels_of_the_qs_program() {
+        assert_eq!(
+            levels_of("ar07-D-QS-100kPa"),
+            vec![("ar07-D-QS-10kPa", 10.0)]
+        );
+        assert!(levels_of("ar07-D").is_empty());
+        // Every level belongs to a state of the file, at a positive pressure.
+        for (name, s) in all_states() {
+            if let Some(l) = &s.level_of {
+                assert!(all_states().contains_key(&l.state), "{name}: {}", l.state);
+                assert!(l.pressure > 0.0, "{name}");
+            }
         }
     }
 
