@@ -197,31 +197,39 @@ pub fn has_program(scene: &Scene) -> bool {
         .any(|s| matches!(s, Step::PressureProgram { .. }))
 }
 
-/// The stage that ends the first program level at `pressure` (relative tolerance 1e-9), if
-/// the scene has one.
-pub fn program_stage(scene: &Scene, pressure: f64) -> Option<usize> {
+/// The levels of the scene's pressure programs: (stage, whether its program loads, pressure).
+fn program_levels(scene: &Scene) -> Vec<(usize, bool, f64)> {
     scene
         .stages()
         .into_iter()
         .enumerate()
-        .find_map(|(stage, (k, step))| {
-            let program = matches!(scene.protocol[k], Step::PressureProgram { .. });
-            match step {
-                Step::Compress { pressure: p, .. }
-                    if program && (p - pressure).abs() <= 1e-9 * pressure.abs() =>
-                {
-                    Some(stage)
-                }
-                _ => None,
-            }
+        .filter_map(|(stage, (k, step))| {
+            let Step::PressureProgram { from, to, .. } = &scene.protocol[k] else {
+                return None;
+            };
+            let Step::Compress { pressure, .. } = step else {
+                return None;
+            };
+            Some((stage, to > from, pressure))
         })
+        .collect()
+}
+
+/// The stage that ends the first program level at `pressure` (relative tolerance 1e-9), if
+/// the scene has one.
+pub fn program_stage(scene: &Scene, pressure: f64) -> Option<usize> {
+    program_levels(scene)
+        .into_iter()
+        .find(|&(_, _, p)| (p - pressure).abs() <= 1e-9 * pressure.abs())
+        .map(|(stage, _, _)| stage)
 }
 
 /// Whether `reproduce` analyses the scene's levels as a consolidation curve (GRC08 §III: the
-/// fit of (9), I(k) along the path): a pressure program reproducing a GRC08 state
-/// (`state_key`). Other states reached by a program are judged at its end only.
+/// fit of (9), I(k) along the path): a pressure program reproducing a state whose published
+/// values are a consolidation law ([`paper_law`]). Other states reached by a program are
+/// judged at its end only.
 pub fn is_cycle(scene: &Scene, state_key: &str) -> bool {
-    has_program(scene) && state_key.starts_with("grc08-")
+    has_program(scene) && paper_law(state_key).is_some()
 }
 
 /// The levels of the scene's pressure programs, from the run's stage reports (`steps`, as in
@@ -229,13 +237,7 @@ pub fn is_cycle(scene: &Scene, state_key: &str) -> bool {
 pub fn levels(scene: &Scene, steps: &serde_json::Value, dir: &Path) -> Result<Vec<Level>> {
     let reports = steps.as_array().map(Vec::as_slice).unwrap_or_default();
     let mut out = Vec::new();
-    for (stage, (k, step)) in scene.stages().into_iter().enumerate() {
-        let Step::PressureProgram { from, to, .. } = &scene.protocol[k] else {
-            continue;
-        };
-        let Step::Compress { pressure, .. } = step else {
-            continue;
-        };
+    for (stage, loading, pressure) in program_levels(scene) {
         let Some(r) = reports
             .iter()
             .find(|r| r["index"].as_u64() == Some(stage as u64))
@@ -274,7 +276,7 @@ pub fn levels(scene: &Scene, steps: &serde_json::Value, dir: &Path) -> Result<Ve
         };
         out.push(Level {
             stage,
-            loading: to > from,
+            loading,
             pressure,
             phi: r["checks"]["packing_fraction"]
                 .as_f64()

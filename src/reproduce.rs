@@ -107,7 +107,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     for (k, &seed) in a.seeds.iter().enumerate() {
         let mut scene = base.clone();
         scene.seed = seed;
-        let dir = out.join(format!("seed-{seed}"));
+        let dir = seed_dir(&out, seed);
         eprintln!(
             "reproduce {scene_name}: seed {seed} ({} of {}) → {}",
             k + 1,
@@ -154,8 +154,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         for (r, v) in runs.iter().zip(values.iter_mut()) {
             let mut scene = base.clone();
             scene.seed = r.seed;
-            let levels =
-                consolidation::levels(&scene, &r.steps, &out.join(format!("seed-{}", r.seed)))?;
+            let levels = consolidation::levels(&scene, &r.steps, &seed_dir(&out, r.seed))?;
             let curve = consolidation::SeedCurve::new(r.seed, levels);
             v.extend(consolidation::values(&curve.levels, curve.fit.as_ref()));
             curves.push(curve);
@@ -189,7 +188,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     let mut step_seeds = Vec::new();
     if step_state != state_key && paper::paper_values(&step_state).is_some() {
         for c in &curves {
-            let dir = out.join(format!("seed-{}", c.seed));
+            let dir = seed_dir(&out, c.seed);
             step_seeds.extend(consolidation::step_values(c, &dir)?);
         }
     }
@@ -298,6 +297,11 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         }
     }
     Ok(0)
+}
+
+/// Where `reproduce` runs seed `seed` of a state whose output folder is `out`.
+fn seed_dir(out: &Path, seed: u64) -> PathBuf {
+    out.join(format!("seed-{seed}"))
 }
 
 /// A seed that finished earlier with the same settings.
@@ -419,10 +423,7 @@ fn level_tables(
         };
         let mut seeds = Vec::new();
         for r in runs {
-            let path = out
-                .join(format!("seed-{}", r.seed))
-                .join(STAGES)
-                .join(stage_file(stage));
+            let path = seed_dir(out, r.seed).join(STAGES).join(stage_file(stage));
             let snap = Snapshot::read(&path).with_context(|| {
                 format!("the state of {state} (stage {stage}); run the seed again to write it")
             })?;
@@ -518,7 +519,7 @@ mod tests {
 
     /// A seed whose stage-end state at `stage` is `snap`, written where `reproduce` keeps it.
     fn seed_with_stage(out: &Path, seed: u64, stage: usize, snap: &Snapshot) -> SeedRun {
-        let dir = out.join(format!("seed-{seed}")).join(STAGES);
+        let dir = seed_dir(out, seed).join(STAGES);
         std::fs::create_dir_all(&dir).unwrap();
         snap.write(&dir.join(stage_file(stage))).unwrap();
         SeedRun {
