@@ -5,7 +5,9 @@
 //! cargo bench -p grainbench-engine --bench kernels
 //! ```
 //!
-//! - `forces`: the force pass over the listed pairs (`System::compute_forces`);
+//! - `forces`: the force pass over the listed pairs (`System::compute_forces`), by the SIMD
+//!   kernel where the CPU has one (`contact::hertz_mindlin_avx`);
+//! - `forces_scalar`: the same pass on the scalar reference path (`System::simd = false`);
 //! - `gather_kick`: the fixed-order force sums and the closing half kick (`System::accumulate`);
 //! - `kick_drift`: the opening half kick and drift of the grains (`System::kick_drift`);
 //! - `rebuild`: a neighbour-list build, history carried over (`System::rebuild`);
@@ -54,6 +56,13 @@ fn kernels(c: &mut Criterion) {
             timed(iters, &mut sys.clone(), &|s| {
                 s.compute_forces(black_box(dt))
             })
+        })
+    });
+    group.bench_function("forces_scalar", |b| {
+        b.iter_custom(|iters| {
+            let mut s = sys.clone();
+            s.simd = false;
+            timed(iters, &mut s, &|s| s.compute_forces(black_box(dt)))
         })
     });
     group.bench_function("gather_kick", |b| {

@@ -5,10 +5,14 @@
 //! results are bit-for-bit identical for any number of threads.
 
 use crate::cell::Cell;
+use crate::contact::hertz_mindlin::HertzMindlin;
+use crate::contact::hertz_mindlin_avx;
+use crate::contact::slider::{Coulomb, NoSlip};
 use crate::contact::{ContactLaw, Pair, PairForce};
 use crate::geometry::{add_outer, Dim, Tensor, VectorOps};
 use crate::neighbor::{min_image, wrap_moved, NeighborList, ROW_CHUNK};
 use rayon::prelude::*;
+use std::any::{Any, TypeId};
 
 /// Grains handled per parallel task in the per-grain loops.
 const GRAIN_CHUNK: usize = 256;
@@ -52,6 +56,9 @@ pub struct System<D: Dim, L: ContactLaw<D>> {
     /// Largest radius, at construction and at each list build (so the per-step staleness
     /// check does not scan the radii).
     r_max: f64,
+    /// Run the law's SIMD force kernel where it has one (default: where the CPU runs it;
+    /// `contact::hertz_mindlin_avx`); `false` keeps the scalar reference path.
+    pub simd: bool,
 }
 
 /// One chunk of rows of the force pass, with its slices of the per-pair arrays.
@@ -120,6 +127,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             step: 0,
             max_disp: 0.0,
             r_max: 0.0,
+            simd: hertz_mindlin_avx::available(),
         };
         sys.r_max = sys.radius.iter().cloned().fold(0.0, f64::max);
         for x in sys.s.iter_mut() {
@@ -427,11 +435,16 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     #[inline(never)]
     fn force_chunk(
         &self,
-        job: Job<'_, L::History, D::V, D::Ang>,
+        mut job: Job<'_, L::History, D::V, D::Ang>,
         erate: &D::V,
         range: f64,
         dt: f64,
     ) -> ChunkSum {
+        if self.simd {
+            if let Some(sum) = self.force_chunk_batch(&mut job, erate, dt) {
+                return sum;
+            }
+        }
         let mut sum = ChunkSum {
             virial: [[0.0; 3]; 3],
             overlap: (0.0, 0, 0),
@@ -469,6 +482,45 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             }
         }
         sum
+    }
+
+    /// [`Self::force_chunk`] by the law's batch kernel, where it has one for this dimension
+    /// and CPU (3D Hertz–Mindlin with Coulomb or no-slip friction, AVX); `None` otherwise.
+    fn force_chunk_batch(
+        &self,
+        job: &mut Job<'_, L::History, D::V, D::Ang>,
+        erate: &D::V,
+        dt: f64,
+    ) -> Option<ChunkSum> {
+        let law = &self.law as &dyn Any;
+        let coulomb = law.downcast_ref::<HertzMindlin<Coulomb>>();
+        let no_slip = law.downcast_ref::<HertzMindlin<NoSlip>>();
+        if coulomb.is_none() && no_slip.is_none() {
+            return None;
+        }
+        let mut chunk = hertz_mindlin_avx::Chunk {
+            rows: job.rows.clone(),
+            first: job.first,
+            row_start: &self.nlist.row_start,
+            partner: &self.nlist.partner,
+            s: same(&self.s)?,
+            u: same(&self.u)?,
+            w: same(&self.w)?,
+            radius: &self.radius,
+            mass: &self.mass,
+            l: *(&self.cell.l as &dyn Any).downcast_ref()?,
+            erate: *(erate as &dyn Any).downcast_ref()?,
+            dt,
+            hist: same_mut(job.hist)?,
+            f: same_mut(job.f)?,
+            c: same_mut(job.c)?,
+        };
+        let (virial, overlap) = match (coulomb, no_slip) {
+            (Some(law), _) => hertz_mindlin_avx::force_chunk(law, &mut chunk)?,
+            (_, Some(law)) => hertz_mindlin_avx::force_chunk(law, &mut chunk)?,
+            _ => return None,
+        };
+        Some(ChunkSum { virial, overlap })
     }
 
     /// Gathers the pair forces on each grain in a fixed order, then the closing half kick
@@ -757,6 +809,20 @@ pub struct Interaction<D: Dim> {
     pub tangential: D::V,
     pub rolling: D::Ang,
     pub gap: f64,
+}
+
+/// `x` as a slice of `B` when `A` is `B` (the batch kernels take concrete types).
+fn same<A: 'static, B: 'static>(x: &[A]) -> Option<&[B]> {
+    (TypeId::of::<A>() == TypeId::of::<B>())
+        // SAFETY: A and B are the same type.
+        .then(|| unsafe { std::slice::from_raw_parts(x.as_ptr().cast::<B>(), x.len()) })
+}
+
+/// [`same`] for a mutable slice.
+fn same_mut<A: 'static, B: 'static>(x: &mut [A]) -> Option<&mut [B]> {
+    (TypeId::of::<A>() == TypeId::of::<B>())
+        // SAFETY: A and B are the same type.
+        .then(|| unsafe { std::slice::from_raw_parts_mut(x.as_mut_ptr().cast::<B>(), x.len()) })
 }
 
 fn add_tensor(acc: &mut Tensor, t: &Tensor) {
