@@ -56,8 +56,9 @@ pub struct System<D: Dim, L: ContactLaw<D>> {
     /// Largest radius, at construction and at each list build (so the per-step staleness
     /// check does not scan the radii).
     r_max: f64,
-    /// Run the law's SIMD force kernel where it has one (default: where the CPU runs it;
-    /// `contact::hertz_mindlin_avx`); `false` keeps the scalar reference path.
+    /// Run the law's SIMD force kernel where it has one (default: where the CPU runs it and
+    /// `GRAINBENCH_SCALAR` is unset; `contact::hertz_mindlin_avx`); `false` keeps the scalar
+    /// reference path.
     pub simd: bool,
 }
 
@@ -127,7 +128,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             step: 0,
             max_disp: 0.0,
             r_max: 0.0,
-            simd: hertz_mindlin_avx::available(),
+            simd: hertz_mindlin_avx::wanted(),
         };
         sys.r_max = sys.radius.iter().cloned().fold(0.0, f64::max);
         for x in sys.s.iter_mut() {

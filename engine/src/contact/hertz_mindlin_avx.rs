@@ -78,6 +78,12 @@ pub fn available() -> bool {
     }
 }
 
+/// Should a new system use the kernel: where the CPU runs it, unless the environment sets
+/// `GRAINBENCH_SCALAR` (any value), which keeps every run on the scalar reference path.
+pub fn wanted() -> bool {
+    available() && std::env::var_os("GRAINBENCH_SCALAR").is_none()
+}
+
 /// The force pass over `chunk` with `law`; `None` where the CPU lacks AVX.
 pub fn force_chunk<F: BatchFriction>(
     law: &HertzMindlin<F, NoCohesion>,
