@@ -284,7 +284,7 @@ mod avx {
         gather(v, idx, |x| *x)
     }
 
-    /// `System::force_chunk` for `law`, a batch of four listed pairs at a time.
+    /// `System::force_chunk` for `law`, four pairs within reach at a time.
     #[target_feature(enable = "avx")]
     pub fn force_chunk<F: BatchFriction>(
         law: &HertzMindlin<F, NoCohesion>,
