@@ -460,16 +460,18 @@ mod avx {
         let (gap, rmin) = (to(gap), to(min(ri, rj)));
         for l in 0..live {
             let k = kk[l];
-            if touch[l].to_bits() != 0 {
+            // The virial takes the lane's force from registers: reading `ch.f[k]` back
+            // straddles the two stores that wrote it and stalls store forwarding.
+            let fk = if touch[l].to_bits() != 0 {
                 ch.hist[k] = Spring { t: t[l], kt: kt[l] };
-                ch.f[k] = f[l];
                 ch.c[k] = c[l];
+                f[l]
             } else {
                 ch.hist[k] = Spring::default();
-                ch.f[k] = V3::zeros();
                 ch.c[k] = V3::zeros();
-            }
-            let fk = ch.f[k];
+                V3::zeros()
+            };
+            ch.f[k] = fk;
             for (a, row) in sum.0.iter_mut().enumerate() {
                 for (b, x) in row.iter_mut().enumerate() {
                     *x += fk[a] * lanes.r[b][l];
