@@ -43,12 +43,14 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
     };
     let every = scene.numerics.check_every.max(1);
     let steps = steps.div_ceil(every) * every;
-    // Never met: positive (the scene validator wants that) and far below any measure.
+    // Never met: positive (the scene validator wants that) and far below any measure; judged
+    // at each check, since a window longer than the S steps would not validate.
     let never = Criteria {
         force: 1e-200,
         moment: 1e-200,
         pressure: 1e-200,
         kinetic: 1e-200,
+        window: 0.0,
         ..stages[k].1.criteria()
     };
     let mut stage = stages[k].1.clone();
@@ -158,6 +160,16 @@ mod tests {
         assert_eq!(start.stages.len(), 1);
         assert_eq!(start.stages[0].max_steps, 400);
         assert_eq!(cut.protocol.len(), 2);
+        let text = toml::to_string(&cut).unwrap();
+        let back = Scene::from_toml(&text, Path::new("x.toml")).unwrap();
+        assert_eq!(back, cut);
+    }
+
+    #[test]
+    fn fixed_steps_of_a_scene_with_a_criteria_window_reads_back() {
+        // GRC07 scenes judge their criteria over 2 T0, longer than a short bench run.
+        let scene = crate::common::load_scene("grc07-type1-phi052-mu05-rr").unwrap();
+        let (cut, _, _) = fixed_steps(&scene, 200).unwrap();
         let text = toml::to_string(&cut).unwrap();
         let back = Scene::from_toml(&text, Path::new("x.toml")).unwrap();
         assert_eq!(back, cut);
