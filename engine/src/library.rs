@@ -64,6 +64,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "grc07-type1-phi052-mu015-rr",
     "grc07-type1-phi052-mu05",
     "grc07-type1-phi052-mu05-rr",
+    "grc07-type1-phi052-mu05-rr-classes",
     "grc07-type2-phi026",
     "grc07-type2-phi026-rr",
     "grc07-type2-phi026-stepped",
