@@ -2,7 +2,7 @@
 //! AR07 §IV.A), by random sequential addition with a cell grid, largest grains first.
 
 use crate::geometry::{Dim, VectorOps};
-use crate::neighbor::min_image;
+use crate::neighbor::branch;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -100,9 +100,7 @@ pub fn random_gas<D: Dim>(
                         };
                         for &j in bucket {
                             let j = j as usize;
-                            let mut ds = s[j] - x;
-                            min_image::<D>(&mut ds);
-                            let r = D::mul(ds, l);
+                            let r = branch::<D>(&x, &s[j], &l);
                             let contact = 0.5 * (d + diameter[j]);
                             if r.norm_squared() < contact * contact {
                                 ok = false;
@@ -176,9 +174,7 @@ mod tests {
     fn no_overlap<D: Dim>(g: &Gas<D>) {
         for i in 0..g.s.len() {
             for j in i + 1..g.s.len() {
-                let mut ds = g.s[j] - g.s[i];
-                min_image::<D>(&mut ds);
-                let r = D::mul(ds, g.l).norm();
+                let r = branch::<D>(&g.s[i], &g.s[j], &g.l).norm();
                 assert!(r >= 0.5 * (g.diameter[i] + g.diameter[j]) * (1.0 - 1e-12));
             }
         }

@@ -125,9 +125,7 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         drop(cells);
         let skin = self.skin;
         let listed = |i: usize, j: usize| -> bool {
-            let mut ds = s[j] - s[i];
-            min_image::<D>(&mut ds);
-            let r = D::mul(ds, *l);
+            let r = branch::<D>(&s[i], &s[j], l);
             let cut = radius[i] + radius[j] + range + skin;
             r.norm_squared() < cut * cut
         };
@@ -285,6 +283,15 @@ pub fn morton_order<D: Dim>(s: &[D::V]) -> Vec<u32> {
     keyed.into_iter().map(|(_, i)| i).collect()
 }
 
+/// Branch vector from grain i to the nearest periodic image of grain j: L·(s_j − s_i) of the
+/// reduced positions `si`, `sj` (in [0, 1)) in a cell of lengths `l`.
+#[inline(always)]
+pub fn branch<D: Dim>(si: &D::V, sj: &D::V, l: &D::V) -> D::V {
+    let mut ds = *sj - *si;
+    min_image::<D>(&mut ds);
+    D::mul(ds, *l)
+}
+
 /// Nearest periodic image of a reduced separation with components in (−1, 1).
 #[inline(always)]
 pub fn min_image<D: Dim>(ds: &mut D::V) {
@@ -329,9 +336,7 @@ mod tests {
         let mut v = Vec::new();
         for i in 0..s.len() {
             for j in i + 1..s.len() {
-                let mut ds = s[j] - s[i];
-                min_image::<D>(&mut ds);
-                let r = D::mul(ds, *l);
+                let r = branch::<D>(&s[i], &s[j], l);
                 let c = radius[i] + radius[j] + cut;
                 if r.norm_squared() < c * c {
                     v.push((i as u32, j as u32));

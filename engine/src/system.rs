@@ -10,7 +10,7 @@ use crate::contact::hertz_mindlin_avx;
 use crate::contact::slider::{Coulomb, NoSlip};
 use crate::contact::{ContactLaw, Pair, PairForce};
 use crate::geometry::{add_outer, Dim, Tensor, VectorOps};
-use crate::neighbor::{min_image, wrap_moved, NeighborList, ROW_CHUNK};
+use crate::neighbor::{branch, wrap_moved, NeighborList, ROW_CHUNK};
 use rayon::prelude::*;
 use std::any::{Any, TypeId};
 
@@ -330,9 +330,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         erate: &D::V,
         range: f64,
     ) -> Option<(Pair<D>, D::V, f64)> {
-        let mut ds = self.s[j] - gi.s;
-        min_image::<D>(&mut ds);
-        let r = D::mul(ds, self.cell.l);
+        let r = branch::<D>(&gi.s, &self.s[j], &self.cell.l);
         let ri = gi.r;
         let rj = self.radius[j];
         let d2 = r.norm_squared();

@@ -106,7 +106,7 @@ mod avx {
     use crate::contact::hertz_mindlin::{HertzMindlin, NoCohesion};
     use crate::contact::slider::Spring;
     use crate::geometry::D3;
-    use crate::neighbor::min_image;
+    use crate::neighbor::branch;
     use std::arch::x86_64::*;
 
     /// Lanes per batch: one AVX register. Eight lanes in two registers (two chains of square
@@ -302,10 +302,8 @@ mod avx {
                 // `System::pair_with`'s range test, here so that the batches hold only pairs
                 // within reach.
                 let j = ch.partner[p] as usize;
-                let mut ds = ch.s[j] - si;
-                min_image::<D3>(&mut ds);
+                let r = branch::<D3>(&si, &ch.s[j], &ch.l);
                 let cut = ri + ch.radius[j];
-                let r = ds.component_mul(&ch.l);
                 if r.norm_squared() >= cut * cut {
                     let k = p - ch.first;
                     ch.hist[k] = Spring::default();
