@@ -442,6 +442,19 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                     );
                 }
             }
+            if let Some(q) = &s.quench {
+                println!(
+                    "           {} velocity quench(es) from t = {:.4e} (AR07 §III.A), {:.3e} kinetic energy per grain removed: {} pairs, {} gained, {} lost, ΔΦ = {:.2e}, largest displacement {:.2e} a",
+                    q.count,
+                    q.first_time,
+                    q.kinetic_removed_per_grain,
+                    q.pairs,
+                    q.pairs_gained,
+                    q.pairs_lost,
+                    q.delta_phi,
+                    q.max_displacement
+                );
+            }
         }
     }
     if outcome.contacts_at_threshold > 0 {

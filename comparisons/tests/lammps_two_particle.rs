@@ -81,6 +81,7 @@ fn start(h: f64, v1: [f64; 3], v2: [f64; 3], m: f64, steps: u64, dt: f64) -> Sta
             check_every: 10,
             relax: None,
             window: 0.0,
+            quench: false,
             servo_gain: None,
         }],
     }

@@ -87,6 +87,7 @@ fn start(zeta: f64, h0: f64, v2: [f64; 3], steps: u64, dt: f64) -> Start {
             check_every: steps,
             relax: None,
             window: 0.0,
+            quench: false,
             servo_gain: None,
         }],
     }

@@ -120,6 +120,7 @@ fn setup() -> Setup {
             check_every: STEPS,
             relax: None,
             window: 0.0,
+            quench: false,
             servo_gain: None,
         }],
     };

@@ -21,6 +21,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "impact-spin",
     "ar07-A-n1372",
     "ar07-D-10kPa-n1372",
+    "ar07-D-10kPa-n1372-quench",
     "ar07-A",
     "ar07-A-ci",
     "ar07-Aprime",

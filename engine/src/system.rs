@@ -273,6 +273,13 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         }
     }
 
+    /// Sets every velocity and spin and the cell's rate to zero (AR07 §III.A,
+    /// `criteria.quench`).
+    pub fn quench(&mut self) {
+        self.damp(0.0);
+        self.cell.ldot = D::V::zero();
+    }
+
     /// Measured stress σ (AR07 (8)): (contact + kinetic virial)/Ω.
     pub fn stress(&self) -> Tensor {
         let omega = self.cell.volume();

@@ -51,6 +51,7 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
         pressure: 1e-200,
         kinetic: 1e-200,
         window: 0.0,
+        quench: false,
         ..stages[k].1.criteria()
     };
     let mut stage = stages[k].1.clone();

@@ -5,7 +5,9 @@
 //! interrupted write leaves the previous checkpoint intact, and closed by a CRC-32 of all the
 //! bytes before it (since version 4), so a damaged file is refused instead of resuming a
 //! different packing (issue 18). Version 5: the stage watch keeps the pressures of
-//! `relax.mean_stress`; older checkpoints are refused by their version, not misread.
+//! `relax.mean_stress`. Version 6: the stage watch logs the quenches of `criteria.quench` and
+//! the step reports say what they did; older checkpoints are refused by their version, not
+//! misread.
 
 use super::report::StepReport;
 use crate::scene::Scene;
@@ -13,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 pub const FORMAT: &str = "grainbench-checkpoint";
-pub const VERSION: u32 = 5;
+pub const VERSION: u32 = 6;
 
 /// Where the run stands.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -160,14 +162,17 @@ mod tests {
         assert!(Checkpoint::read(&path).unwrap_err().contains("damaged"));
     }
 
-    /// Checkpoints of an older version (4: a payload without the stage watch's pressures) are
-    /// refused by their version, naming the one this build reads.
+    /// Checkpoints of an older version (5: a stage watch without the quench log) are refused
+    /// by their version, naming the one this build reads.
     #[test]
     fn older_versions_are_refused_by_version() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("checkpoint.bin");
-        Checkpoint::write(&path, &header(4), &[1u8, 2, 3]).unwrap();
+        Checkpoint::write(&path, &header(VERSION - 1), &[1u8, 2, 3]).unwrap();
         let e = Checkpoint::read(&path).unwrap_err();
-        assert!(e.contains("v4") && e.contains("v5"), "{e}");
+        assert!(
+            e.contains(&format!("v{}", VERSION - 1)) && e.contains(&format!("v{VERSION}")),
+            "{e}"
+        );
     }
 }

@@ -4,8 +4,9 @@
 //!
 //! [`setup`] builds the grains and the system, [`stages`] runs the protocol, [`numerics`]
 //! resolves what each stage reads of the scene, [`checks`] measures equilibrium and detects
-//! blow-ups, [`output`] writes snapshots, [`report`] holds what a run reports, [`options`] how
-//! it is driven, [`checkpoint`] the resumable state on disk.
+//! blow-ups, [`relax`] and [`quench`] are the optional final phases of a stage (GRC07 damping,
+//! AR07's velocity quench), [`output`] writes snapshots, [`report`] holds what a run reports,
+//! [`options`] how it is driven, [`checkpoint`] the resumable state on disk.
 
 pub mod checkpoint;
 pub mod checks;
@@ -13,6 +14,7 @@ pub mod numerics;
 pub mod options;
 pub mod output;
 pub mod particles_file;
+pub mod quench;
 pub mod relax;
 pub mod report;
 pub mod setup;

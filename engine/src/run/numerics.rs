@@ -39,6 +39,9 @@ pub struct StageNumerics {
     /// before it ends (`criteria.window`, 0: the first check that meets them).
     pub max_time: f64,
     pub window: f64,
+    /// `criteria.quench`: velocities set to zero at a check where only the kinetic criterion
+    /// fails (AR07 §III.A, engine/src/run/quench.rs).
+    pub quench: bool,
     /// The stage's final relaxation, if any (engine/src/run/relax.rs).
     pub relax: Option<Relax>,
     /// The law has GRC07 adhesion (force unit F0, time unit T0).
@@ -75,6 +78,7 @@ impl StageNumerics {
             full_time: false,
             max_time: 0.0,
             window: 0.0,
+            quench: false,
             relax: None,
             cohesive: scene.law.cohesion().is_some(),
             attractive: scene.law.attractive(),
@@ -120,6 +124,7 @@ impl StageNumerics {
             ),
             max_time: step.max_time(),
             window: criteria.window,
+            quench: criteria.quench,
             relax: step.relax(),
             ..Self::of_scene(scene)
         }

@@ -10,7 +10,7 @@
 //! dashpots) until the criteria hold over a window. [`Relaxation`] reports what the damped
 //! phase changed: pairs gained and lost, ΔΦ and the largest grain displacement.
 
-use crate::geometry::{Dim, VectorOps as _};
+use crate::geometry::Dim;
 use crate::scene::Relax;
 use serde::{Deserialize, Serialize};
 
@@ -67,6 +67,8 @@ pub struct StageWatch<D: Dim> {
     /// `settle_time`, for `relax.mean_stress`.
     #[serde(default)]
     deviations: std::collections::VecDeque<(f64, f64)>,
+    /// The velocity quenches of `criteria.quench` (AR07 §III.A).
+    pub quench: super::quench::QuenchLog<D>,
 }
 
 impl<D: Dim> StageWatch<D> {
@@ -79,6 +81,7 @@ impl<D: Dim> StageWatch<D> {
             held_since: None,
             peak_strain_rate: 0.0,
             deviations: Default::default(),
+            quench: Default::default(),
         }
     }
 
@@ -209,19 +212,7 @@ impl<D: Dim> StageWatch<D> {
         let (relax, sw) = (self.relax?, self.switch.as_ref()?);
         pairs.sort_unstable();
         let common = count_common(&sw.pairs, pairs);
-        let max_displacement =
-            sw.s.iter()
-                .zip(s)
-                .map(|(a, b)| {
-                    let mut d = *b - *a;
-                    for k in 0..D::D {
-                        d[k] -= d[k].round();
-                        d[k] *= l[k];
-                    }
-                    d.norm_squared()
-                })
-                .fold(0.0, f64::max)
-                .sqrt();
+        let max_displacement = super::quench::max_displacement::<D>(&sw.s, s, l);
         Some(Relaxation {
             start_time: sw.time - t0,
             damping: relax.damping,
@@ -254,7 +245,7 @@ pub struct Settling {
 }
 
 /// Pairs present in both sorted lists.
-fn count_common(a: &[(u32, u32)], b: &[(u32, u32)]) -> usize {
+pub(super) fn count_common(a: &[(u32, u32)], b: &[(u32, u32)]) -> usize {
     let (mut i, mut j, mut n) = (0, 0, 0);
     while i < a.len() && j < b.len() {
         match a[i].cmp(&b[j]) {

@@ -61,6 +61,15 @@ impl Checks {
             && self.stress_ratio < 1.0
             && self.kinetic_ratio < 1.0
     }
+
+    /// Every criterion but the kinetic one met, the kinetic one not: when
+    /// `criteria.quench` sets the velocities to zero (AR07 §III.A).
+    pub fn only_kinetic_fails(&self) -> bool {
+        self.force_ratio < 1.0
+            && self.moment_ratio < 1.0
+            && self.stress_ratio < 1.0
+            && self.kinetic_ratio >= 1.0
+    }
 }
 
 /// How a protocol step ended.
@@ -116,6 +125,10 @@ pub struct StepReport {
     /// written, `null` otherwise: checkpoint headers are bincode, which cannot skip fields).
     #[serde(default)]
     pub relaxation: Option<super::relax::Relaxation>,
+    /// The velocity quenches of `criteria.quench`, when there were any (always written,
+    /// `null` otherwise, as `relaxation`).
+    #[serde(default)]
+    pub quench: Option<super::quench::Quenched>,
 }
 
 /// Result of a whole run.

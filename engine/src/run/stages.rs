@@ -198,6 +198,7 @@ pub(super) fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize, step: &Step) -> Res
         },
         peak_strain_rate: 0.0,
         relaxation: None,
+        quench: None,
     });
     Ok(())
 }
@@ -471,6 +472,16 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 }
             }
             watch.peak_strain_rate = watch.peak_strain_rate.max(checks.strain_rate);
+            if num.quench && checks.only_kinetic_fails() {
+                watch.quench.record(
+                    sys.time,
+                    sys.kinetic_energy() / n,
+                    || pair_list(&inter),
+                    checks.packing_fraction,
+                    &sys.s,
+                );
+                sys.quench();
+            }
             let held = watch.held(sys.time, checks.equilibrium(), num.window);
             if aggregate && checks.clusters == 1 {
                 end = StepEnd::OneCluster;
@@ -530,6 +541,13 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         } else {
             None
         };
+        let quench = watch.quench.report(
+            t0,
+            &mut pair_list(&sys.interactions()),
+            sys.packing_fraction(),
+            &sys.s,
+            sys.cell.l,
+        );
         ctx.reports.push(StepReport {
             index: k,
             kind: kind.into(),
@@ -540,6 +558,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             checks,
             peak_strain_rate: watch.peak_strain_rate,
             relaxation,
+            quench,
         });
         if end == StepEnd::Interrupted {
             return Ok(true);

@@ -567,10 +567,22 @@ pub struct Criteria {
     /// (~2 T0) keeps a vibrating packing from passing at a lucky instant.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub window: f64,
+    /// AR07 §III.A: "on setting all velocities to zero, it is observed that the sample does
+    /// not regain kinetic energy". At a check where every criterion but the kinetic one holds,
+    /// the grains' velocities and spins and the cell's rate are set to zero, and the stage goes
+    /// on to be judged at the next check (engine/src/run/quench.rs). For packings whose
+    /// divalent grains keep rolling on two contacts (AR07 App. E), a motion no dashpot of the
+    /// law damps; the stage report says how often and what it changed.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub quench: bool,
 }
 
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
+}
+
+fn is_false(x: &bool) -> bool {
+    !*x
 }
 
 /// Scene form of [`Criteria`]: a preset and overrides.
@@ -584,6 +596,7 @@ struct CriteriaTable {
     pressure: Option<f64>,
     kinetic: Option<f64>,
     window: Option<f64>,
+    quench: Option<bool>,
 }
 
 impl TryFrom<CriteriaTable> for Criteria {
@@ -606,6 +619,7 @@ impl TryFrom<CriteriaTable> for Criteria {
             pressure: t.pressure.unwrap_or(base.pressure),
             kinetic: t.kinetic.unwrap_or(base.kinetic),
             window: t.window.unwrap_or(base.window),
+            quench: t.quench.unwrap_or(base.quench),
         })
     }
 }
@@ -627,6 +641,7 @@ impl Criteria {
             pressure: 1e-4,
             kinetic: 1e-8,
             window: 0.0,
+            quench: false,
         }
     }
     /// GRC07 §II.D.
@@ -638,6 +653,7 @@ impl Criteria {
             pressure: 1e-4,
             kinetic: 5e-8,
             window: 0.0,
+            quench: false,
         }
     }
     /// GRC08 §II.D.1: as GRC07 with 1e-5.

@@ -23,9 +23,10 @@ CELL_MASS = 4e3
 # Steps between frames of trace.txt (None: no trace).
 TRACE_EVERY = None
 # One dict per DEM stage: kind, pressure (compress), strain-rate cap (1/time),
-# time step, step limit, check period, mu, kappa, tolerances (absolute).
+# time step, step limit, check period, mu, kappa, tolerances (absolute), and whether
+# a check where only the kinetic criterion fails zeroes the velocities (AR07 §III.A).
 STAGES = [
-    dict(kind='compress', pressure=1, rate=1e-3, dt=8.378257522444837e-5, max_steps=238713121, check_every=200, mu=1e300, kappa=1.81e5, tol_force=1e-4, tol_moment=1e-4, tol_stress=1e-4, tol_kinetic=1e-8),
+    dict(kind='compress', pressure=1, rate=1e-3, dt=8.378257522444837e-5, max_steps=238713121, check_every=200, mu=1e300, kappa=1.81e5, tol_force=1e-4, tol_moment=1e-4, tol_stress=1e-4, tol_kinetic=1e-8, quench=False),
 ]
 
 import math, sys, time
@@ -147,7 +148,8 @@ KE_PARTS = [0.0, 0.0]
 
 
 def measures(st):
-    """The criteria of stage st: (ok, max force, max torque, stress deviation, KE/grain, σ)."""
+    """The criteria of stage st: (ok, all but the kinetic one, max force, max torque, stress
+    deviation, KE/grain, σ)."""
     fmax = 0.0
     tmax = 0.0
     for b in O.bodies:
@@ -178,8 +180,9 @@ def measures(st):
     else:
         dev = 0.0
         ok_s = True
-    ok = fmax <= st['tol_force'] and tmax <= st['tol_moment'] and ok_s and ke <= st['tol_kinetic']
-    return ok, fmax, tmax, dev, ke, sig
+    rest = fmax <= st['tol_force'] and tmax <= st['tol_moment'] and ok_s
+    ok = rest and ke <= st['tol_kinetic']
+    return ok, rest, fmax, tmax, dev, ke, sig
 
 
 def packing_fraction():
@@ -187,13 +190,13 @@ def packing_fraction():
     return v / O.cell.volume
 
 
-CHECK = {'stage': None, 'k': 0, 'ok': False, 'last_print': 0.0}
+CHECK = {'stage': None, 'k': 0, 'ok': False, 'last_print': 0.0, 'quenches': 0}
 
 
 def check():
     """The stage's criteria; a line at most every second (and the last); pause when met."""
     st = CHECK['stage']
-    ok, fmax, tmax, dev, ke, sig = measures(st)
+    ok, rest, fmax, tmax, dev, ke, sig = measures(st)
     now = time.time()
     if ok or now - CHECK['last_print'] >= 1.0 or O.iter + st['check_every'] > O.stopAtIter:
         CHECK['last_print'] = now
@@ -205,6 +208,16 @@ def check():
     if ok:
         CHECK['ok'] = True
         O.pause()
+    elif rest and st['quench']:
+        # AR07 §III.A: every velocity and spin, and the cell's rate, set to zero.
+        for b in O.bodies:
+            b.state.vel = Vector3.Zero
+            b.state.angVel = Vector3.Zero
+        LDOT[:] = [0.0, 0.0, 0.0]
+        O.cell.velGrad = Matrix3.Zero
+        CHECK['quenches'] += 1
+        print('grainbench: quench %d at step %d, time %.6g' % (CHECK['quenches'], O.iter + 1, O.time))
+        sys.stdout.flush()
 
 
 statuses = []
@@ -220,7 +233,7 @@ for k, st in enumerate(STAGES):
         servo_runner.dead = True
         LDOT[:] = [0.0, 0.0, 0.0]
         O.cell.velGrad = Matrix3.Zero
-    CHECK.update(stage=st, k=k, ok=False, last_print=0.0)
+    CHECK.update(stage=st, k=k, ok=False, last_print=0.0, quenches=0)
     check_runner.iterPeriod = st['check_every']
     # Runs after step O.iter's integration: the first check sees check_every steps done.
     check_runner.iterLast = O.iter - 1

@@ -103,6 +103,9 @@ pub enum Feature {
     /// The relaxation's switch on the pressure averaged over `settle_time`
     /// (`relax.mean_stress`, GRC08 pressure programs).
     RelaxMeanStress,
+    /// Velocities and spins set to zero at a check where only the kinetic criterion fails
+    /// (`criteria.quench`, AR07 §III.A).
+    VelocityQuench,
     /// Hard-grain stages before the first DEM stage (melting, growth, expansion).
     HardGrainPrelude,
     /// Hard-grain stages between DEM stages (AR07 §IV.B state C: expand, mix, compress again).
@@ -112,7 +115,7 @@ pub enum Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 30] = [
+    pub const ALL: [Feature; 31] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -140,6 +143,7 @@ impl Feature {
         Feature::EquilibriumCriteria,
         Feature::FinalRelaxation,
         Feature::RelaxMeanStress,
+        Feature::VelocityQuench,
         Feature::HardGrainPrelude,
         Feature::HardGrainInterlude,
         Feature::ContactDump,
@@ -174,6 +178,7 @@ impl Feature {
             Feature::EquilibriumCriteria => "equilibrium-criteria",
             Feature::FinalRelaxation => "final-relaxation",
             Feature::RelaxMeanStress => "relax-mean-stress",
+            Feature::VelocityQuench => "velocity-quench",
             Feature::HardGrainPrelude => "hard-grain-prelude",
             Feature::HardGrainInterlude => "hard-grain-interlude",
             Feature::ContactDump => "contact-dump",
@@ -218,6 +223,9 @@ impl Feature {
             }
             Feature::RelaxMeanStress => {
                 "the relaxation's switch tests the pressure averaged over settle_time (`relax.mean_stress`)"
+            }
+            Feature::VelocityQuench => {
+                "velocities and spins zeroed at a check where only the kinetic criterion fails (`criteria.quench`, AR07 §III.A)"
             }
             Feature::HardGrainPrelude => "hard-grain stages before the first DEM stage",
             Feature::HardGrainInterlude => "hard-grain stages between DEM stages (AR07 state C)",
@@ -327,6 +335,14 @@ pub fn features(start: &Start) -> Vec<Feature> {
     {
         f.push(Feature::RelaxMeanStress);
     }
+    if start
+        .scene
+        .stages()
+        .iter()
+        .any(|(_, s)| s.criteria().quench)
+    {
+        f.push(Feature::VelocityQuench);
+    }
     if !start.prelude.is_empty() {
         f.push(Feature::HardGrainPrelude);
     }
@@ -388,6 +404,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::AffineVelocity => Approximate(REMAP),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::RelaxMeanStress => Unsupported("the switch is tested on the stress at the end of each settle_time chunk, not on its mean over the chunk; not generated"),
+            F::VelocityQuench => Approximate("`velocity all set 0 0 0` and `set group all omega 0 0 0` where the stage's `fix halt` stops on the force, moment and stress criteria (judged as `equilibrium-criteria`); Berendsen has no cell velocity to zero"),
             F::FinalRelaxation => Approximate("switch tested at the end of each settle_time chunk on the contact count (compute contact/atom: touching pairs, not the interaction list) with the kinetic and stress criteria; damping by fix langevin at T = 0 (drag −γ m v exact, spins at LAMMPS's rotational rate); tangential dashpot inside the Coulomb cap; window checked by fix halt runs"),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the barostat; contact history carries over"),
@@ -414,6 +431,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::AffineVelocity => Approximate(REMAP),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::FinalRelaxation | F::RelaxMeanStress => Unsupported(RELAX),
+            F::VelocityQuench => Unsupported("LIGGGHTS 3.8 has no `set … omega` to zero the spins; not generated"),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the servo; contact history carries over"),
             F::EquilibriumCriteria => Approximate("criteria as ours (kinetic energy: translation of all grains, rotation of grains with a contact), checked between runs of check_every steps"),
@@ -439,6 +457,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::RemapPositionsOnly => Approximate("bodies carry the cell's velocity field (homoDeform): contact velocities include ε̇·r"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::FinalRelaxation | F::RelaxMeanStress => Unsupported(RELAX),
+            F::VelocityQuench => Approximate("velocities, spins and the servo's cell rate zeroed in the check PyRunner where the force, moment and stress criteria hold (judged as the deck's other criteria)"),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("κ and μ changes rescale kno, kso and tan φ of existing contacts (not checked by a test)"),
             _ => Exact,

@@ -606,9 +606,28 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
             }
         }
         let _ = writeln!(s, "variable ok{k1} equal {}", crit.join("*"));
+        if st.quench {
+            // Every criterion but the kinetic one (the first two factors are force and kinetic).
+            let rest: Vec<&String> = crit
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != 1)
+                .map(|(_, c)| c)
+                .collect();
+            let _ = writeln!(
+                s,
+                "variable q{k1} equal {}",
+                rest.iter()
+                    .map(|c| c.as_str())
+                    .collect::<Vec<_>>()
+                    .join("*")
+            );
+        }
         let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
         if let Some(relax) = st.relax {
             relaxed_stage(&mut s, start, st, k1, relax, code, &rebase);
+        } else if st.quench && !full_time {
+            quenched_stage(&mut s, st, k1, &rebase);
         } else {
             let _ = writeln!(
                 s,
@@ -657,6 +676,40 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
          print \"${{status}}\" file final.status\n",
     );
     s
+}
+
+/// A stage with `criteria.quench` (engine/src/run/quench.rs): runs stopped by `fix halt` when
+/// every criterion but the kinetic one holds; then the stage ends if the kinetic one holds too,
+/// or every velocity and spin is set to zero and the stage goes on for one check interval,
+/// judged again at its end as our engine judges its next check.
+fn quenched_stage(s: &mut String, st: &super::Stage, k: usize, rebase: &str) {
+    let _ = write!(
+        s,
+        "thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k} v_q{k}\n\
+         thermo_modify norm no flush yes\n\
+         thermo {every}\n\
+         # Quench (criteria.quench, AR07 §III.A): where only the kinetic criterion fails, all\n\
+         # velocities and spins are set to zero and the stage goes on.\n\
+         variable end{k} equal $(step+{max})\n\
+         variable nq{k} equal 0\n\
+         label quench{k}\n\
+         fix halt all halt {every} v_q{k} > 0.5 error continue\n\
+         {rebase}run ${{end{k}}} upto\n\
+         unfix halt\n\
+         label judge{k}\n\
+         if \"${{ok{k}}} > 0.5\" then \"variable status string equilibrium\" \"jump SELF done{k}\"\n\
+         if \"$(step) >= ${{end{k}}}\" then \"variable status string time-limit\" \"jump SELF done{k}\"\n\
+         if \"${{q{k}}} < 0.5\" then \"jump SELF quench{k}\"\n\
+         velocity all set 0.0 0.0 0.0\n\
+         set group all omega 0.0 0.0 0.0\n\
+         variable nq{k} equal $(v_nq{k}+1)\n\
+         print \"grainbench: quench ${{nq{k}}} at step $(step), time $(time)\"\n\
+         {rebase}run {every}\n\
+         jump SELF judge{k}\n\
+         label done{k}\n",
+        every = st.check_every,
+        max = st.max_steps,
+    );
 }
 
 /// A stage with a final relaxation (`relax`, engine/src/run/relax.rs), as far as LAMMPS can
@@ -941,6 +994,37 @@ mod tests {
 
     /// A frictional scene without the servo keeps Berendsen, and says that LAMMPS's velocities
     /// do not see the affine strain rate.
+    /// `criteria.quench` (AR07 §III.A): LAMMPS stops on every criterion but the kinetic one,
+    /// zeroes velocities and spins and judges again one check later; YADE does it in its check;
+    /// LIGGGHTS, without `set … omega`, refuses the scene.
+    #[test]
+    fn quench_decks_zero_the_velocities_where_only_the_kinetic_criterion_fails() {
+        let start = library_start("ar07-D-10kPa-n1372-quench");
+        for code in [Code::Lammps, Code::Lammps2025] {
+            let input = &super::super::deck(&start, code).unwrap().files[0].1;
+            for line in [
+                "variable q1 equal (c_fmax[1]<1e-4)*(c_fmax[2]<1e-4)*(abs(c_pvir[1]-1)<1e-4)",
+                "fix halt all halt 200 v_q1 > 0.5 error continue\nrun ${end1} upto\nunfix halt\nlabel judge1\n",
+                "if \"${q1} < 0.5\" then \"jump SELF quench1\"\nvelocity all set 0.0 0.0 0.0\nset group all omega 0.0 0.0 0.0\n",
+                "run 200\njump SELF judge1\nlabel done1\n",
+            ] {
+                assert!(input.contains(line), "{code:?} lacks {line}:\n{input}");
+            }
+        }
+        let yade = &super::super::deck(&start, Code::Yade).unwrap().files[0].1;
+        assert!(yade.contains("tol_kinetic=1e-8, quench=True)"), "{yade}");
+        assert!(yade.contains("    elif rest and st['quench']:\n"));
+        let refusal = super::super::deck(&start, Code::Liggghts).unwrap_err();
+        assert!(
+            refusal.to_string().contains("velocity-quench unsupported"),
+            "{refusal}"
+        );
+        // Without `quench` none of it is written.
+        let plain = library_start("ar07-D-10kPa-n1372");
+        let input = &super::super::deck(&plain, Code::Lammps).unwrap().files[0].1;
+        assert!(!input.contains("velocity all set") && !input.contains("variable q1"));
+    }
+
     #[test]
     fn berendsen_decks_name_the_affine_velocity_deviation() {
         let start = library_start("xcode-smoke");

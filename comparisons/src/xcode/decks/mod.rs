@@ -47,6 +47,9 @@ pub struct Stage {
     pub relax: Option<Relax>,
     /// Time over which the criteria must hold before the stage ends (0: one check).
     pub window: f64,
+    /// `criteria.quench`: velocities zeroed at a check where only the kinetic criterion
+    /// fails (AR07 §III.A).
+    pub quench: bool,
     /// The scene's first-order servo gain (`numerics.servo_gain`), if it sets one.
     pub servo_gain: Option<f64>,
 }
@@ -281,6 +284,7 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
             check_every: scene.numerics.check_every,
             relax: step.relax(),
             window: step.criteria().window,
+            quench: step.criteria().quench,
             servo_gain: scene.numerics.servo_gain,
         });
     }

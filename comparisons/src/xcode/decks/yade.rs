@@ -78,7 +78,12 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
             .map_or("None".to_string(), |k| k.to_string()),
     ));
     s.push_str("# One dict per DEM stage: kind, pressure (compress), strain-rate cap (1/time),\n");
-    s.push_str("# time step, step limit, check period, mu, kappa, tolerances (absolute).\n");
+    s.push_str(
+        "# time step, step limit, check period, mu, kappa, tolerances (absolute), and whether\n",
+    );
+    s.push_str(
+        "# a check where only the kinetic criterion fails zeroes the velocities (AR07 §III.A).\n",
+    );
     s.push_str("STAGES = [\n");
     for st in &start.stages {
         let (kind, p) = match st.kind {
@@ -88,7 +93,8 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
         };
         s.push_str(&format!(
             "    dict(kind='{kind}', pressure={}, rate={}, dt={}, max_steps={}, check_every={}, \
-             mu={}, kappa={}, tol_force={}, tol_moment={}, tol_stress={}, tol_kinetic={}),\n",
+             mu={}, kappa={}, tol_force={}, tol_moment={}, tol_stress={}, tol_kinetic={}, \
+             quench={}),\n",
             py(p),
             py(st.max_strain_rate),
             py(st.dt),
@@ -100,6 +106,7 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
             py(st.tolerances.moment),
             py(st.tolerances.stress),
             py(st.tolerances.kinetic_per_grain),
+            if st.quench { "True" } else { "False" },
         ));
     }
     s.push_str("]\n");
@@ -264,7 +271,8 @@ KE_PARTS = [0.0, 0.0]
 
 
 def measures(st):
-    """The criteria of stage st: (ok, max force, max torque, stress deviation, KE/grain, σ)."""
+    """The criteria of stage st: (ok, all but the kinetic one, max force, max torque, stress
+    deviation, KE/grain, σ)."""
     fmax = 0.0
     tmax = 0.0
     for b in O.bodies:
@@ -295,8 +303,9 @@ def measures(st):
     else:
         dev = 0.0
         ok_s = True
-    ok = fmax <= st['tol_force'] and tmax <= st['tol_moment'] and ok_s and ke <= st['tol_kinetic']
-    return ok, fmax, tmax, dev, ke, sig
+    rest = fmax <= st['tol_force'] and tmax <= st['tol_moment'] and ok_s
+    ok = rest and ke <= st['tol_kinetic']
+    return ok, rest, fmax, tmax, dev, ke, sig
 
 
 def packing_fraction():
@@ -304,13 +313,13 @@ def packing_fraction():
     return v / O.cell.volume
 
 
-CHECK = {'stage': None, 'k': 0, 'ok': False, 'last_print': 0.0}
+CHECK = {'stage': None, 'k': 0, 'ok': False, 'last_print': 0.0, 'quenches': 0}
 
 
 def check():
     """The stage's criteria; a line at most every second (and the last); pause when met."""
     st = CHECK['stage']
-    ok, fmax, tmax, dev, ke, sig = measures(st)
+    ok, rest, fmax, tmax, dev, ke, sig = measures(st)
     now = time.time()
     if ok or now - CHECK['last_print'] >= 1.0 or O.iter + st['check_every'] > O.stopAtIter:
         CHECK['last_print'] = now
@@ -322,6 +331,16 @@ def check():
     if ok:
         CHECK['ok'] = True
         O.pause()
+    elif rest and st['quench']:
+        # AR07 §III.A: every velocity and spin, and the cell's rate, set to zero.
+        for b in O.bodies:
+            b.state.vel = Vector3.Zero
+            b.state.angVel = Vector3.Zero
+        LDOT[:] = [0.0, 0.0, 0.0]
+        O.cell.velGrad = Matrix3.Zero
+        CHECK['quenches'] += 1
+        print('grainbench: quench %d at step %d, time %.6g' % (CHECK['quenches'], O.iter + 1, O.time))
+        sys.stdout.flush()
 
 
 statuses = []
@@ -337,7 +356,7 @@ for k, st in enumerate(STAGES):
         servo_runner.dead = True
         LDOT[:] = [0.0, 0.0, 0.0]
         O.cell.velGrad = Matrix3.Zero
-    CHECK.update(stage=st, k=k, ok=False, last_print=0.0)
+    CHECK.update(stage=st, k=k, ok=False, last_print=0.0, quenches=0)
     check_runner.iterPeriod = st['check_every']
     # Runs after step O.iter's integration: the first check sees check_every steps done.
     check_runner.iterLast = O.iter - 1
