@@ -84,7 +84,9 @@ pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> R
                 }
             }
             Err(refusal) => {
-                // Recorded beside the decks, so a change of the matrix shows as a diff.
+                // Recorded beside the decks, so a change of the matrix shows as a diff; a deck
+                // written there before the scene or the matrix changed goes.
+                remove_stale_deck(&root.join(code.name()), code)?;
                 let path = root.join(code.name()).join(REFUSED);
                 write_atomic(&path, format!("{refusal}\n").as_bytes())
                     .with_context(|| format!("writing {}", path.display()))?;
@@ -92,6 +94,39 @@ pub fn write_decks(start: &Start, codes: &[Code], root: &Path, quiet: bool) -> R
                     eprintln!("{code}: not written: {refusal}");
                 }
             }
+        }
+    }
+    Ok(())
+}
+
+/// Removes the deck a generator wrote into `dir` for `code` (its `deck.json`, the data files
+/// it lists, the input scripts headed `# grainbench deck for scene` and the LAMMPS 2021
+/// tables), leaving any other file alone.
+fn remove_stale_deck(dir: &Path, code: Code) -> Result<()> {
+    let Ok(bytes) = std::fs::read(dir.join("deck.json")) else {
+        return Ok(());
+    };
+    let Ok(doc) = serde_json::from_slice::<serde_json::Value>(&bytes) else {
+        return Ok(());
+    };
+    if doc["code"].as_str() != Some(code.name()) {
+        return Ok(());
+    }
+    let data: Vec<String> = doc["data"]
+        .as_object()
+        .map(|m| m.keys().cloned().collect())
+        .unwrap_or_default();
+    for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
+        let path = entry?.path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let generated = name == "deck.json"
+            || data.iter().any(|d| d == name)
+            || name == decks::lammps_table::TABLE
+            || name == decks::lammps_table::BENCH_TABLE
+            || std::fs::read(&path).is_ok_and(|b| b.starts_with(b"# grainbench deck for scene"));
+        if generated && path.is_file() {
+            std::fs::remove_file(&path)
+                .with_context(|| format!("removing the stale deck file {}", path.display()))?;
         }
     }
     Ok(())
@@ -158,4 +193,29 @@ pub fn capabilities_command(scene: Option<&str>, codes: &[String]) -> Result<i32
         }
     }
     Ok(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scene that a code refused after it had a deck there: the refusal replaces the deck,
+    /// other files stay.
+    #[test]
+    fn a_refusal_removes_the_deck_written_before() {
+        let root = tempfile::tempdir().unwrap();
+        let dir = root.path().join("liggghts");
+        let smoke = Start::of(&load_scene("xcode-smoke").unwrap()).unwrap();
+        write_decks(&smoke, &[Code::Liggghts], root.path(), true).unwrap();
+        assert!(dir.join("in.liggghts").exists() && dir.join("deck.json").exists());
+        std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+        let quench = Start::of(&load_scene("ar07-D-10kPa-n1372-quench").unwrap()).unwrap();
+        write_decks(&quench, &[Code::Liggghts], root.path(), true).unwrap();
+        let mut left: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["notes.txt", REFUSED]);
+    }
 }
