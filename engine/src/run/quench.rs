@@ -11,8 +11,8 @@
 //! criteria again. [`Quenched`] reports how often, the energy removed, and what the packing did
 //! from the first quench to the end of the stage.
 
-use super::relax::count_common;
-use crate::geometry::{Dim, VectorOps as _};
+use super::relax::Reference;
+use crate::geometry::Dim;
 use serde::{Deserialize, Serialize};
 
 /// What the quenches of a stage removed and changed (in the stage report).
@@ -39,18 +39,9 @@ pub struct Quenched {
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(bound = "")]
 pub struct QuenchLog<D: Dim> {
-    first: Option<First<D>>,
+    first: Option<Reference<D>>,
     count: u32,
     removed: f64,
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(bound = "")]
-struct First<D: Dim> {
-    time: f64,
-    pairs: Vec<(u32, u32)>,
-    phi: f64,
-    s: Vec<D::V>,
 }
 
 impl<D: Dim> QuenchLog<D> {
@@ -65,14 +56,7 @@ impl<D: Dim> QuenchLog<D> {
         s: &[D::V],
     ) {
         if self.first.is_none() {
-            let mut pairs = pairs();
-            pairs.sort_unstable();
-            self.first = Some(First {
-                time,
-                pairs,
-                phi,
-                s: s.to_vec(),
-            });
+            self.first = Some(Reference::new(time, pairs(), phi, s));
         }
         self.count += 1;
         self.removed += kinetic_per_grain;
@@ -89,35 +73,18 @@ impl<D: Dim> QuenchLog<D> {
         l: D::V,
     ) -> Option<Quenched> {
         let first = self.first.as_ref()?;
-        pairs.sort_unstable();
-        let common = count_common(&first.pairs, pairs);
+        let c = first.change(pairs, phi, s, l);
         Some(Quenched {
             first_time: first.time - t0,
             count: self.count,
             kinetic_removed_per_grain: self.removed,
-            pairs: first.pairs.len(),
-            pairs_gained: pairs.len() - common,
-            pairs_lost: first.pairs.len() - common,
-            delta_phi: phi - first.phi,
-            max_displacement: max_displacement::<D>(&first.s, s, l),
+            pairs: c.pairs,
+            pairs_gained: c.gained,
+            pairs_lost: c.lost,
+            delta_phi: c.delta_phi,
+            max_displacement: c.max_displacement,
         })
     }
-}
-
-/// Largest nearest-image displacement between two sets of reduced positions, scaled by `l`.
-pub(super) fn max_displacement<D: Dim>(from: &[D::V], to: &[D::V], l: D::V) -> f64 {
-    from.iter()
-        .zip(to)
-        .map(|(a, b)| {
-            let mut d = *b - *a;
-            for k in 0..D::D {
-                d[k] -= d[k].round();
-                d[k] *= l[k];
-            }
-            d.norm_squared()
-        })
-        .fold(0.0, f64::max)
-        .sqrt()
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@
 //! dashpots) until the criteria hold over a window. [`Relaxation`] reports what the damped
 //! phase changed: pairs gained and lost, ΔΦ and the largest grain displacement.
 
-use crate::geometry::Dim;
+use crate::geometry::{Dim, VectorOps as _};
 use crate::scene::Relax;
 use serde::{Deserialize, Serialize};
 
@@ -41,11 +41,72 @@ pub struct Relaxation {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(bound = "")]
 struct Switch<D: Dim> {
-    time: f64,
+    at: Reference<D>,
     rollers: usize,
+}
+
+/// A state kept to measure what a later phase of the stage changed (the damped phase here,
+/// the quenches in [`super::quench`]): its time, interacting pairs (sorted), Φ and reduced
+/// positions.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound = "")]
+pub(super) struct Reference<D: Dim> {
+    pub time: f64,
     pairs: Vec<(u32, u32)>,
     phi: f64,
     s: Vec<D::V>,
+}
+
+/// What changed from a [`Reference`] to a later state.
+pub(super) struct Change {
+    /// Pairs at the reference, and those gained and lost since.
+    pub pairs: usize,
+    pub gained: usize,
+    pub lost: usize,
+    /// Φ(later) − Φ(reference).
+    pub delta_phi: f64,
+    /// Largest nearest-image displacement of a grain centre, scaled by the later cell, in a.
+    pub max_displacement: f64,
+}
+
+impl<D: Dim> Reference<D> {
+    /// The state at `time`: interacting pairs (i < j, any order), Φ, reduced positions.
+    pub fn new(time: f64, mut pairs: Vec<(u32, u32)>, phi: f64, s: &[D::V]) -> Self {
+        pairs.sort_unstable();
+        Reference {
+            time,
+            pairs,
+            phi,
+            s: s.to_vec(),
+        }
+    }
+
+    /// What changed by the state with these pairs, Φ, reduced positions and cell lengths.
+    pub fn change(&self, pairs: &mut [(u32, u32)], phi: f64, s: &[D::V], l: D::V) -> Change {
+        pairs.sort_unstable();
+        let common = count_common(&self.pairs, pairs);
+        let max_displacement = self
+            .s
+            .iter()
+            .zip(s)
+            .map(|(a, b)| {
+                let mut d = *b - *a;
+                for k in 0..D::D {
+                    d[k] -= d[k].round();
+                    d[k] *= l[k];
+                }
+                d.norm_squared()
+            })
+            .fold(0.0, f64::max)
+            .sqrt();
+        Change {
+            pairs: self.pairs.len(),
+            gained: pairs.len() - common,
+            lost: self.pairs.len() - common,
+            delta_phi: phi - self.phi,
+            max_displacement,
+        }
+    }
 }
 
 /// What a stage watches across its checks: settling of the interaction list, the damped
@@ -176,13 +237,9 @@ impl<D: Dim> StageWatch<D> {
             self.unchanged_since = time;
         }
         if at_rest && time - self.unchanged_since >= relax.settle_time {
-            pairs.sort_unstable();
             self.switch = Some(Switch {
-                time,
+                at: Reference::new(time, pairs.to_vec(), phi, s),
                 rollers,
-                pairs: pairs.to_vec(),
-                phi,
-                s: s.to_vec(),
             });
             return true;
         }
@@ -210,18 +267,16 @@ impl<D: Dim> StageWatch<D> {
         l: D::V,
     ) -> Option<Relaxation> {
         let (relax, sw) = (self.relax?, self.switch.as_ref()?);
-        pairs.sort_unstable();
-        let common = count_common(&sw.pairs, pairs);
-        let max_displacement = super::quench::max_displacement::<D>(&sw.s, s, l);
+        let c = sw.at.change(pairs, phi, s, l);
         Some(Relaxation {
-            start_time: sw.time - t0,
+            start_time: sw.at.time - t0,
             damping: relax.damping,
             tangential_zeta: relax.tangential_zeta,
-            pairs: sw.pairs.len(),
-            pairs_gained: pairs.len() - common,
-            pairs_lost: sw.pairs.len() - common,
-            delta_phi: phi - sw.phi,
-            max_displacement,
+            pairs: c.pairs,
+            pairs_gained: c.gained,
+            pairs_lost: c.lost,
+            delta_phi: c.delta_phi,
+            max_displacement: c.max_displacement,
             free_rollers: sw.rollers,
         })
     }
@@ -245,7 +300,7 @@ pub struct Settling {
 }
 
 /// Pairs present in both sorted lists.
-pub(super) fn count_common(a: &[(u32, u32)], b: &[(u32, u32)]) -> usize {
+fn count_common(a: &[(u32, u32)], b: &[(u32, u32)]) -> usize {
     let (mut i, mut j, mut n) = (0, 0, 0);
     while i < a.len() && j < b.len() {
         match a[i].cmp(&b[j]) {
