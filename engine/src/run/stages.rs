@@ -472,7 +472,8 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 }
             }
             watch.peak_strain_rate = watch.peak_strain_rate.max(checks.strain_rate);
-            if num.quench && checks.only_kinetic_fails() {
+            // Not in stages that end otherwise than on the criteria (one cluster, full time).
+            if num.quench && !aggregate && !full_time && checks.only_kinetic_fails() {
                 watch.quench.record(
                     sys.time,
                     sys.kinetic_energy() / n,

@@ -572,7 +572,8 @@ pub struct Criteria {
     /// the grains' velocities and spins and the cell's rate are set to zero, and the stage goes
     /// on to be judged at the next check (engine/src/run/quench.rs). For packings whose
     /// divalent grains keep rolling on two contacts (AR07 App. E), a motion no dashpot of the
-    /// law damps; the stage report says how often and what it changed.
+    /// law damps; the stage report says how often and what it changed. Ignored by stages that
+    /// do not end on the criteria (`aggregate`, full-time `fixed-volume`).
     #[serde(default, skip_serializing_if = "is_false")]
     pub quench: bool,
 }

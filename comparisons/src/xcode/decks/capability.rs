@@ -335,12 +335,7 @@ pub fn features(start: &Start) -> Vec<Feature> {
     {
         f.push(Feature::RelaxMeanStress);
     }
-    if start
-        .scene
-        .stages()
-        .iter()
-        .any(|(_, s)| s.criteria().quench)
-    {
+    if start.stages.iter().any(|s| s.quench) {
         f.push(Feature::VelocityQuench);
     }
     if !start.prelude.is_empty() {

@@ -284,7 +284,12 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
             check_every: scene.numerics.check_every,
             relax: step.relax(),
             window: step.criteria().window,
-            quench: step.criteria().quench,
+            // As in our engine: not in stages that end otherwise than on the criteria.
+            quench: step.criteria().quench
+                && matches!(
+                    kind,
+                    StageKind::Compress { .. } | StageKind::FixedVolume { full_time: false }
+                ),
             servo_gain: scene.numerics.servo_gain,
         });
     }
