@@ -62,6 +62,11 @@ impl<D: Dim> QuenchLog<D> {
         self.removed += kinetic_per_grain;
     }
 
+    /// Whether the stage has quenched.
+    pub fn any(&self) -> bool {
+        self.first.is_some()
+    }
+
     /// The report at the end of the stage (`None` without a quench), from its final pairs,
     /// Φ, reduced positions and cell lengths.
     pub fn report(

@@ -542,13 +542,17 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         } else {
             None
         };
-        let quench = watch.quench.report(
-            t0,
-            &mut pair_list(&sys.interactions()),
-            sys.packing_fraction(),
-            &sys.s,
-            sys.cell.l,
-        );
+        let quench = if watch.quench.any() {
+            watch.quench.report(
+                t0,
+                &mut pair_list(&sys.interactions()),
+                sys.packing_fraction(),
+                &sys.s,
+                sys.cell.l,
+            )
+        } else {
+            None
+        };
         ctx.reports.push(StepReport {
             index: k,
             kind: kind.into(),
