@@ -54,21 +54,20 @@ pub struct Checks {
 }
 
 impl Checks {
+    /// The force, moment and stress criteria met.
+    fn static_criteria(&self) -> bool {
+        self.force_ratio < 1.0 && self.moment_ratio < 1.0 && self.stress_ratio < 1.0
+    }
+
     /// All criteria met.
     pub fn equilibrium(&self) -> bool {
-        self.force_ratio < 1.0
-            && self.moment_ratio < 1.0
-            && self.stress_ratio < 1.0
-            && self.kinetic_ratio < 1.0
+        self.static_criteria() && self.kinetic_ratio < 1.0
     }
 
     /// Every criterion but the kinetic one met, the kinetic one not: when
     /// `criteria.quench` sets the velocities to zero (AR07 §III.A).
     pub fn only_kinetic_fails(&self) -> bool {
-        self.force_ratio < 1.0
-            && self.moment_ratio < 1.0
-            && self.stress_ratio < 1.0
-            && self.kinetic_ratio >= 1.0
+        self.static_criteria() && self.kinetic_ratio >= 1.0
     }
 }
 

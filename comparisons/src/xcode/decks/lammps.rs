@@ -545,10 +545,9 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         if k > 0 {
             let _ = writeln!(s, "{}", pair_coeff(start, st.kappa, st.mu, code, 0.0));
         }
-        let mut crit = vec![
-            format!("(c_fmax[1]<{})", num(tol.force)),
-            format!("(v_kpg<{})", num(tol.kinetic_per_grain)),
-        ];
+        // Every criterion but the kinetic one (the quench's test), then all of them.
+        let kinetic = format!("(v_kpg<{})", num(tol.kinetic_per_grain));
+        let mut crit = vec![format!("(c_fmax[1]<{})", num(tol.force))];
         if friction && st.mu.value() > 0.0 {
             crit.push(format!("(c_fmax[2]<{})", num(tol.moment)));
         }
@@ -605,23 +604,14 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
                 ));
             }
         }
-        let _ = writeln!(s, "variable ok{k1} equal {}", crit.join("*"));
+        let (force, rest) = crit.split_first().expect("the force criterion");
+        let _ = writeln!(
+            s,
+            "variable ok{k1} equal {force}*{kinetic}{}",
+            rest.iter().map(|c| format!("*{c}")).collect::<String>()
+        );
         if st.quench {
-            // Every criterion but the kinetic one (the first two factors are force and kinetic).
-            let rest: Vec<&String> = crit
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| *i != 1)
-                .map(|(_, c)| c)
-                .collect();
-            let _ = writeln!(
-                s,
-                "variable q{k1} equal {}",
-                rest.iter()
-                    .map(|c| c.as_str())
-                    .collect::<Vec<_>>()
-                    .join("*")
-            );
+            let _ = writeln!(s, "variable q{k1} equal {}", crit.join("*"));
         }
         let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
         if let Some(relax) = st.relax {
@@ -992,8 +982,6 @@ mod tests {
         }
     }
 
-    /// A frictional scene without the servo keeps Berendsen, and says that LAMMPS's velocities
-    /// do not see the affine strain rate.
     /// `criteria.quench` (AR07 §III.A): LAMMPS stops on every criterion but the kinetic one,
     /// zeroes velocities and spins and judges again one check later; YADE does it in its check;
     /// LIGGGHTS, without `set … omega`, refuses the scene.
@@ -1025,6 +1013,8 @@ mod tests {
         assert!(!input.contains("velocity all set") && !input.contains("variable q1"));
     }
 
+    /// A frictional scene without the servo keeps Berendsen, and says that LAMMPS's velocities
+    /// do not see the affine strain rate.
     #[test]
     fn berendsen_decks_name_the_affine_velocity_deviation() {
         let start = library_start("xcode-smoke");
