@@ -424,11 +424,16 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
                 );
             }
             if let Some(r) = &s.relaxation {
+                let how = match &r.fire {
+                    Some(f) => format!(
+                        "FIRE: {} steps, {} velocity resets, time step up to {:.1}× the stage's",
+                        f.steps, f.resets, f.peak_dt
+                    ),
+                    None => format!("damping γ = {}, ζ_t = {}", r.damping, r.tangential_zeta),
+                };
                 println!(
-                    "           relaxation from t = {:.4e} (damping γ = {}, ζ_t = {}): {} pairs, {} gained, {} lost, ΔΦ = {:.2e}, largest displacement {:.2e} a",
+                    "           relaxation from t = {:.4e} ({how}): {} pairs, {} gained, {} lost, ΔΦ = {:.2e}, largest displacement {:.2e} a",
                     r.start_time,
-                    r.damping,
-                    r.tangential_zeta,
                     r.pairs,
                     r.pairs_gained,
                     r.pairs_lost,

@@ -575,6 +575,34 @@ fn interrupted_runs_resume_bit_identical() {
         .stderr(predicate::str::contains("checkpoint"));
 }
 
+/// FIRE's state (its time step, α, counters) is in the checkpoint: a frictionless compression
+/// relaxed by FIRE from its first check (`relax.method = "fire"`), killed inside the FIRE
+/// phase and resumed, ends bit-identical to the uninterrupted run.
+#[test]
+fn fire_relaxation_resumes_bit_identical() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = RESUMABLE
+        .replace("mu = 0.3", "mu = 0.0")
+        .replace("count = 256", "count = 500")
+        .replace(
+        "max_time = 60.0",
+        "max_time = 5000.0\ncriteria = { preset = \"ar07\" }\nrelax = { method = \"fire\", settle_time = 0.0, settle_factor = 1e6 }",
+    );
+    let scene = scene_file(dir.path(), "fire.toml", &text);
+    grainbench()
+        .args(["run", "-q", "-j", "2", "--require-equilibrium", "-o"])
+        .arg(dir.path().join("straight"))
+        .arg(&scene)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("(FIRE:"));
+    let straight = std::fs::read_to_string(dir.path().join("straight/final.snap.json")).unwrap();
+    assert!(
+        interrupted_then_resumed(dir.path(), &scene, "-KILL") == straight,
+        "resumed FIRE run differs from the uninterrupted one"
+    );
+}
+
 /// Every kind of stage in one small 2D run: hard-disk mixing and growth, a frictionless
 /// compression, an expansion and remixing, then friction on with a stiffness ramp and a
 /// pressure program.

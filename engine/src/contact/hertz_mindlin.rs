@@ -140,6 +140,10 @@ impl<D: Dim, F: Friction, C: HertzCohesion> ContactLaw<D> for HertzMindlin<F, C>
         }
     }
 
+    fn without_normal_damping(&self) -> Self {
+        HertzMindlin { zeta: 0.0, ..*self }
+    }
+
     fn describe(&self) -> String {
         format!(
             "hertz-mindlin Ẽ={:.4e} K_T/K_N={:.4} ζ={} μ={}{}",

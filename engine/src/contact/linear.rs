@@ -158,6 +158,10 @@ impl<D: Dim, C: CohesionModel, F: Friction, R: RollingResistance> ContactLaw<D>
         Linear { zeta_t, ..*self }
     }
 
+    fn without_normal_damping(&self) -> Self {
+        Linear { zeta: 0.0, ..*self }
+    }
+
     fn describe(&self) -> String {
         let mut s = format!(
             "linear K_N={:.4e} K_T={:.4e} ζ={} μ={}",

@@ -111,6 +111,11 @@ pub trait ContactLaw<D: Dim>: Copy + Send + Sync + std::fmt::Debug + 'static {
     fn with_tangential_damping(&self, _zeta_t: f64) -> Self {
         *self
     }
+    /// The same law without its normal dashpot (ζ = 0): FIRE's phase of a final relaxation
+    /// (engine/src/run/fire.rs), where the velocity resets dissipate and the dashpot would
+    /// only lower the stable time step; it exerts no force at rest, so the equilibria are
+    /// the law's.
+    fn without_normal_damping(&self) -> Self;
     /// Tangential force and rolling moment stored in the history (for snapshots).
     fn stored(&self, hist: &Self::History) -> (D::V, D::Ang);
 }

@@ -6,8 +6,8 @@
 //! bytes before it (since version 4), so a damaged file is refused instead of resuming a
 //! different packing (issue 18). Version 5: the stage watch keeps the pressures of
 //! `relax.mean_stress`. Version 6: the stage watch logs the quenches of `criteria.quench` and
-//! the step reports say what they did; older checkpoints are refused by their version, not
-//! misread.
+//! the step reports say what they did. Version 7: the stage watch keeps FIRE's state
+//! (`relax.method = "fire"`). Older checkpoints are refused by their version, not misread.
 
 use super::report::StepReport;
 use crate::scene::Scene;
@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 pub const FORMAT: &str = "grainbench-checkpoint";
-pub const VERSION: u32 = 6;
+pub const VERSION: u32 = 7;
 
 /// Where the run stands.
 #[derive(Clone, Debug, Serialize, Deserialize)]

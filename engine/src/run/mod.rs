@@ -10,6 +10,7 @@
 
 pub mod checkpoint;
 pub mod checks;
+pub mod fire;
 pub mod numerics;
 pub mod options;
 pub mod output;

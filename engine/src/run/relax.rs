@@ -10,8 +10,9 @@
 //! dashpots) until the criteria hold over a window. [`Relaxation`] reports what the damped
 //! phase changed: pairs gained and lost, ΔΦ and the largest grain displacement.
 
+use super::fire::{Fire, FireStats};
 use crate::geometry::{Dim, VectorOps as _};
-use crate::scene::Relax;
+use crate::scene::{Relax, RelaxMethod};
 use serde::{Deserialize, Serialize};
 
 /// What the damped phase of a stage changed (in the stage report).
@@ -35,6 +36,9 @@ pub struct Relaxation {
     /// test and stopped by the damping where they were (0 without `free_rollers`).
     #[serde(default)]
     pub free_rollers: usize,
+    /// What FIRE did, when it was the method (`relax.method = "fire"`; damping is then 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fire: Option<FireStats>,
 }
 
 /// The state at the switch, kept to measure what the damped phase changes.
@@ -130,6 +134,8 @@ pub struct StageWatch<D: Dim> {
     deviations: std::collections::VecDeque<(f64, f64)>,
     /// The velocity quenches of `criteria.quench` (AR07 §III.A).
     pub quench: super::quench::QuenchLog<D>,
+    /// FIRE after the switch (`relax.method = "fire"`).
+    pub fire: Option<Fire>,
 }
 
 impl<D: Dim> StageWatch<D> {
@@ -143,6 +149,7 @@ impl<D: Dim> StageWatch<D> {
             peak_strain_rate: 0.0,
             deviations: Default::default(),
             quench: Default::default(),
+            fire: None,
         }
     }
 
@@ -166,11 +173,19 @@ impl<D: Dim> StageWatch<D> {
         self.switch.is_some()
     }
 
-    /// Velocity factor e^{−γ dt} of one step of the damped phase (`None` before it).
+    /// Velocity factor e^{−γ dt} of one step of the damped phase (`None` before it, and
+    /// with FIRE).
     pub fn damping_factor(&self, dt: f64) -> Option<f64> {
         match (&self.relax, &self.switch) {
-            (Some(r), Some(_)) => Some((-r.damping * dt).exp()),
+            (Some(r), Some(_)) if r.method == RelaxMethod::Damping => Some((-r.damping * dt).exp()),
             _ => None,
+        }
+    }
+
+    /// At the switch of a FIRE relaxation, starts FIRE from the stage's time step `dt`.
+    pub fn start_fire(&mut self, dt: f64) {
+        if self.relax.is_some_and(|r| r.method == RelaxMethod::Fire) {
+            self.fire = Some(Fire::new(dt));
         }
     }
 
@@ -278,6 +293,7 @@ impl<D: Dim> StageWatch<D> {
             delta_phi: c.delta_phi,
             max_displacement: c.max_displacement,
             free_rollers: sw.rollers,
+            fire: self.fire.as_ref().map(Fire::stats),
         })
     }
 }
@@ -347,6 +363,7 @@ mod tests {
 
     fn relax() -> Relax {
         Relax {
+            method: RelaxMethod::Damping,
             damping: 1.0,
             tangential_zeta: 0.0,
             settle_time: 2.0,

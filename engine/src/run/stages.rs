@@ -324,6 +324,11 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         let mut first_check = true;
         loop {
             let damping = watch.damping_factor(sys.dt);
+            if let Some(f) = &watch.fire {
+                // Also after a resume inside the FIRE phase.
+                sys.dt = f.dt();
+                sys.law = sys.law.without_normal_damping();
+            }
             for m in 0..num.check_every {
                 if m + 1 == num.check_every {
                     prev_force.clear();
@@ -334,6 +339,9 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 sys.step();
                 if let Some(f) = damping {
                     sys.damp(f);
+                }
+                if let Some(f) = watch.fire.as_mut() {
+                    f.after_step(sys);
                 }
                 let (ov, i, j) = sys.max_overlap;
                 if ov.is_nan() || ov > num.max_overlap {
@@ -467,6 +475,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     &sys.s,
                 );
             if observed {
+                watch.start_fire(sys.dt);
                 if let Some(z) = watch.tangential_zeta() {
                     sys.law = sys.law.with_tangential_damping(z);
                 }

@@ -509,11 +509,20 @@ impl Step {
 /// `tangential_zeta` > 0, tangential and rolling dashpots of that fraction of critical act in
 /// the contacts, until the criteria hold. Before the switch the law is the paper's, exactly.
 ///
-/// In a scene: `relax = { damping = 1.0, tangential_zeta = 0.5, settle_time = 10.0 }`.
+/// With `method = "fire"` the phase after the switch is FIRE (engine/src/run/fire.rs) in place
+/// of the damping: for frictionless, non-adhesive laws only, whose equilibrium states are the
+/// local minima of the enthalpy (AR07 §III.A).
+///
+/// In a scene: `relax = { damping = 1.0, tangential_zeta = 0.5, settle_time = 10.0 }`, or
+/// `relax = { method = "fire", settle_time = 0.0, settle_factor = 1e3 }`.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Relax {
-    /// Background damping rate γ, per time unit (T0 with cohesion).
+    /// What acts after the switch.
+    #[serde(default, skip_serializing_if = "RelaxMethod::is_damping")]
+    pub method: RelaxMethod,
+    /// Background damping rate γ, per time unit (T0 with cohesion); `damping` method only.
+    #[serde(default)]
     pub damping: f64,
     /// Tangential and rolling dashpot, fraction of critical (linear law only).
     #[serde(default)]
@@ -542,6 +551,24 @@ pub struct Relax {
     /// on the target. The stage still ends on the criteria themselves.
     #[serde(default)]
     pub mean_stress: bool,
+}
+
+/// What a final relaxation applies after its switch ([`Relax::method`]).
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum RelaxMethod {
+    /// Background damping of velocities and spins (and optional tangential/rolling dashpots).
+    #[default]
+    Damping,
+    /// FIRE (Bitzek et al. 2006) on the grains and the cell, from the stage's time step up to
+    /// ten times it: a descent to the nearest minimum of the enthalpy (AR07 §III.A).
+    Fire,
+}
+
+impl RelaxMethod {
+    fn is_damping(&self) -> bool {
+        *self == RelaxMethod::Damping
+    }
 }
 
 /// Equilibrium criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), in units of a force scale

@@ -1,7 +1,7 @@
 //! Reading a scene file and checking every value: errors name the file, the field and what
 //! is allowed.
 
-use super::{Arrangement, ForceScale, Law, Mu, Scene, Step};
+use super::{Arrangement, ForceScale, Law, Mu, RelaxMethod, Scene, Step};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -490,7 +490,37 @@ impl Scene {
                 positive(&f("criteria.kinetic"), c.kinetic)?;
                 in_range(&f("criteria.window"), c.window, 0.0, step.max_time())?;
                 if let Some(r) = step.relax() {
-                    positive(&f("relax.damping"), r.damping)?;
+                    match r.method {
+                        RelaxMethod::Damping => positive(&f("relax.damping"), r.damping)?,
+                        // AR07 §III.A: only frictionless, non-adhesive equilibria are the
+                        // minima of an energy that FIRE can descend to.
+                        RelaxMethod::Fire => {
+                            let mu = step.mu().unwrap_or(self.law.mu()).value();
+                            let rolling = matches!(
+                                self.law,
+                                Law::Linear {
+                                    rolling: Some(_),
+                                    ..
+                                }
+                            );
+                            let why = if mu != 0.0 {
+                                Some(format!("needs frictionless contacts: this step has μ = {mu}, and friction makes the contact forces depend on the path, not on an energy (AR07 §III.A); set mu = 0.0 or use method = \"damping\""))
+                            } else if self.law.attractive() || rolling {
+                                Some("needs a non-adhesive law without rolling resistance (AR07 §III.A: the equilibria of frictionless, non-adhesive grains minimise the enthalpy); use method = \"damping\"".to_string())
+                            } else if r.damping != 0.0
+                                || r.tangential_zeta != 0.0
+                                || r.free_rollers
+                                || r.mean_stress
+                            {
+                                Some("takes only settle_time and settle_factor: damping, tangential_zeta, free_rollers and mean_stress belong to method = \"damping\"; remove them".to_string())
+                            } else {
+                                None
+                            };
+                            if let Some(why) = why {
+                                return Err(err(&f("relax.method"), format!("\"fire\" {why}")));
+                            }
+                        }
+                    }
                     in_range(&f("relax.settle_time"), r.settle_time, 0.0, step.max_time())?;
                     in_range(&f("relax.tangential_zeta"), r.tangential_zeta, 0.0, 1.0)?;
                     in_range(&f("relax.settle_factor"), r.settle_factor, 1.0, 1e6)?;

@@ -5,7 +5,7 @@
 
 use super::lammps_table::Classes;
 use super::{Code, StageKind, Start};
-use grainbench_engine::scene::{Law, Mu};
+use grainbench_engine::scene::{Law, Mu, RelaxMethod};
 
 /// How a code expresses a feature.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -103,6 +103,9 @@ pub enum Feature {
     /// The relaxation's switch on the pressure averaged over `settle_time`
     /// (`relax.mean_stress`, GRC08 pressure programs).
     RelaxMeanStress,
+    /// FIRE in place of the damping after the switch (`relax.method = "fire"`, frictionless
+    /// stages, issue 15).
+    FireRelaxation,
     /// Velocities and spins set to zero at a check where only the kinetic criterion fails
     /// (`criteria.quench`, AR07 §III.A).
     VelocityQuench,
@@ -115,7 +118,7 @@ pub enum Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 31] = [
+    pub const ALL: [Feature; 32] = [
         Feature::HertzNormal,
         Feature::MindlinTangential,
         Feature::MindlinUnloading,
@@ -143,6 +146,7 @@ impl Feature {
         Feature::EquilibriumCriteria,
         Feature::FinalRelaxation,
         Feature::RelaxMeanStress,
+        Feature::FireRelaxation,
         Feature::VelocityQuench,
         Feature::HardGrainPrelude,
         Feature::HardGrainInterlude,
@@ -178,6 +182,7 @@ impl Feature {
             Feature::EquilibriumCriteria => "equilibrium-criteria",
             Feature::FinalRelaxation => "final-relaxation",
             Feature::RelaxMeanStress => "relax-mean-stress",
+            Feature::FireRelaxation => "fire-relaxation",
             Feature::VelocityQuench => "velocity-quench",
             Feature::HardGrainPrelude => "hard-grain-prelude",
             Feature::HardGrainInterlude => "hard-grain-interlude",
@@ -223,6 +228,9 @@ impl Feature {
             }
             Feature::RelaxMeanStress => {
                 "the relaxation's switch tests the pressure averaged over settle_time (`relax.mean_stress`)"
+            }
+            Feature::FireRelaxation => {
+                "FIRE (Bitzek et al. 2006) on grains and cell after the switch, no normal dashpot (`relax.method = \"fire\"`)"
             }
             Feature::VelocityQuench => {
                 "velocities and spins zeroed at a check where only the kinetic criterion fails (`criteria.quench`, AR07 §III.A)"
@@ -319,13 +327,18 @@ pub fn features(start: &Start) -> Vec<Feature> {
         f.push(Feature::MultiStage);
     }
     f.push(Feature::EquilibriumCriteria);
-    if start
-        .scene
-        .stages()
-        .iter()
-        .any(|(_, s)| s.relax().is_some())
-    {
+    let method = |m: RelaxMethod| {
+        start
+            .scene
+            .stages()
+            .iter()
+            .any(|(_, s)| s.relax().is_some_and(|r| r.method == m))
+    };
+    if method(RelaxMethod::Damping) {
         f.push(Feature::FinalRelaxation);
+    }
+    if method(RelaxMethod::Fire) {
+        f.push(Feature::FireRelaxation);
     }
     if start
         .scene
@@ -354,6 +367,8 @@ const REMAP: &str = "the box change remaps positions (`remap x`), not velocities
 
 const RELAX: &str =
     "the switch to background damping on a settled interaction list is not generated";
+
+const FIRE: &str = "FIRE inside a stress-controlled MD stage, with the cell among its degrees of freedom, is not generated";
 
 const NO_ROLLING: &str = "no rolling resistance at all (see `rolling-resistance`)";
 
@@ -399,6 +414,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::AffineVelocity => Approximate(REMAP),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::RelaxMeanStress => Unsupported("the switch is tested on the stress at the end of each settle_time chunk, not on its mean over the chunk; not generated"),
+            F::FireRelaxation => Unsupported("min_style fire minimises a potential energy, which granular pair styles do not tally, and relaxes the box only through fix box/relax; FIRE inside a stress-controlled MD stage is not generated"),
             F::VelocityQuench => Approximate("`velocity all set 0 0 0` and `set group all omega 0 0 0` where the stage's `fix halt` stops on the force, moment and stress criteria (judged as `equilibrium-criteria`); Berendsen has no cell velocity to zero"),
             F::FinalRelaxation => Approximate("switch tested at the end of each settle_time chunk on the contact count (compute contact/atom: touching pairs, not the interaction list) with the kinetic and stress criteria; damping by fix langevin at T = 0 (drag −γ m v exact, spins at LAMMPS's rotational rate); tangential dashpot inside the Coulomb cap; window checked by fix halt runs"),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
@@ -426,6 +442,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::AffineVelocity => Approximate(REMAP),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::FinalRelaxation | F::RelaxMeanStress => Unsupported(RELAX),
+            F::FireRelaxation => Unsupported(FIRE),
             F::VelocityQuench => Unsupported("LIGGGHTS 3.8 has no `set … omega` to zero the spins; not generated"),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("each stage restarts the servo; contact history carries over"),
@@ -452,6 +469,7 @@ pub fn support(code: Code, f: Feature) -> Support {
             F::RemapPositionsOnly => Approximate("bodies carry the cell's velocity field (homoDeform): contact velocities include ε̇·r"),
             F::OneClusterStop => Unsupported("no cluster count to stop on"),
             F::FinalRelaxation | F::RelaxMeanStress => Unsupported(RELAX),
+            F::FireRelaxation => Unsupported(FIRE),
             F::VelocityQuench => Approximate("velocities, spins and the servo's cell rate zeroed in the check PyRunner where the force, moment and stress criteria hold (judged as the deck's other criteria)"),
             F::HardGrainInterlude => Unsupported(INTERLUDE),
             F::MultiStage => Approximate("κ and μ changes rescale kno, kso and tan φ of existing contacts (not checked by a test)"),
