@@ -9,12 +9,16 @@ use grainbench_engine::run::{run_scene, RunOptions, StepEnd};
 use grainbench_engine::Scene;
 use std::path::Path;
 
-fn small(relax: &str) -> Scene {
-    let text = SCENES
+fn small_text() -> &'static str {
+    SCENES
         .iter()
         .find(|(n, _)| *n == "ar07-frictionless-small")
         .unwrap()
-        .1;
+        .1
+}
+
+fn small(relax: &str) -> Scene {
+    let text = small_text();
     let criteria = "criteria = { preset = \"ar07\" }";
     assert!(text.contains(criteria));
     let text = text.replace(criteria, &format!("{criteria}\n{relax}"));
@@ -61,11 +65,7 @@ fn fire_reaches_the_criteria_sooner_at_the_same_packing() {
 
 #[test]
 fn fire_is_refused_with_friction_or_damping_settings() {
-    let text = SCENES
-        .iter()
-        .find(|(n, _)| *n == "ar07-frictionless-small")
-        .unwrap()
-        .1;
+    let text = small_text();
     let fire = "criteria = { preset = \"ar07\" }\nrelax = { method = \"fire\", settle_time = 0.0 }";
     let with = |law: &str, relax: &str| {
         let t = text
