@@ -8,6 +8,7 @@
 #   - hertz-damping: total normal force clipped at 0 without adhesion (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force
 #   - no-slip: μ = ∞ given as friction angle atan(1e300) (tan ≈ 1.6e16); T still drops to 0 while the total normal force is clipped
 #   - stress-control: AR07 (7) cell dynamics and rate cap integrated by a script servo (PyRunner each step, O.cell.velGrad) on the contact stress only; PeriTriaxController hunted around 1.01–1.09 P
+#   - velocity-quench: velocities, spins and the servo's cell rate zeroed in the check PyRunner where the force, moment and stress criteria hold (judged as the deck's other criteria)
 # Run: yade -n -x run.py (in this directory). Writes final.cell, final.bodies,
 # final.interactions, final.status (docs/external-formats/yade.md).
 
@@ -26,7 +27,7 @@ TRACE_EVERY = None
 # time step, step limit, check period, mu, kappa, tolerances (absolute), and whether
 # a check where only the kinetic criterion fails zeroes the velocities (AR07 §III.A).
 STAGES = [
-    dict(kind='compress', pressure=1, rate=1e-2, dt=8.378257522444837e-5, max_steps=238713121, check_every=200, mu=1e300, kappa=1.81e5, tol_force=1e-4, tol_moment=1e-4, tol_stress=1e-4, tol_kinetic=1e-8, quench=False),
+    dict(kind='compress', pressure=1, rate=1e-2, dt=8.378257522444837e-5, max_steps=238713121, check_every=200, mu=1e300, kappa=1.81e5, tol_force=1e-4, tol_moment=1e-4, tol_stress=1e-4, tol_kinetic=1e-8, quench=True),
 ]
 
 import math, sys, time
