@@ -518,8 +518,9 @@ impl Step {
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Relax {
-    /// What acts after the switch.
-    #[serde(default, skip_serializing_if = "RelaxMethod::is_damping")]
+    /// What acts after the switch. Always written: the stage watch keeps this struct in
+    /// binary checkpoints, where a skipped field would misalign what follows.
+    #[serde(default)]
     pub method: RelaxMethod,
     /// Background damping rate γ, per time unit (T0 with cohesion); `damping` method only.
     #[serde(default)]
@@ -563,12 +564,6 @@ pub enum RelaxMethod {
     /// FIRE (Bitzek et al. 2006) on the grains and the cell, from the stage's time step up to
     /// ten times it: a descent to the nearest minimum of the enthalpy (AR07 §III.A).
     Fire,
-}
-
-impl RelaxMethod {
-    fn is_damping(&self) -> bool {
-        *self == RelaxMethod::Damping
-    }
 }
 
 /// Equilibrium criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), in units of a force scale
