@@ -38,7 +38,7 @@
 
 use super::lammps_table::{pair_lines, tables, Classes, TABLE};
 use super::{header_lines, num, Code, Deck, StageKind, Start};
-use grainbench_engine::scene::{Law, Mu, Relax};
+use grainbench_engine::scene::{Law, Mu, Relax, RelaxMethod};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 
@@ -614,7 +614,9 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
             let _ = writeln!(s, "variable q{k1} equal {}", crit.join("*"));
         }
         let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
-        if let Some(relax) = st.relax {
+        // FIRE (`relax.method = "fire"`) is not generated: the stage runs the law's dynamics
+        // to the criteria (capability `fire-relaxation`, approximate).
+        if let Some(relax) = st.relax.filter(|r| r.method == RelaxMethod::Damping) {
             relaxed_stage(&mut s, start, st, k1, relax, code, &rebase);
         } else if st.quench && !full_time {
             quenched_stage(&mut s, st, k1, &rebase);
