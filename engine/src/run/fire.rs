@@ -43,8 +43,8 @@ pub struct Fire {
     dt0: f64,
     dt: f64,
     alpha: f64,
-    /// Steps in a row with P > 0.
-    uphill_free: u32,
+    /// Steps in a row with P > 0 (moving down the enthalpy).
+    downhill: u32,
     /// Steps taken, and how many had P ≤ 0 (velocities zeroed).
     pub steps: u64,
     pub resets: u64,
@@ -69,7 +69,7 @@ impl Fire {
             dt0: dt,
             dt,
             alpha: ALPHA_START,
-            uphill_free: 0,
+            downhill: 0,
             steps: 0,
             resets: 0,
             peak_dt: 1.0,
@@ -106,14 +106,14 @@ impl Fire {
                     *u = *u * a + *f * b;
                 }
             }
-            self.uphill_free += 1;
-            if self.uphill_free > N_MIN {
+            self.downhill += 1;
+            if self.downhill > N_MIN {
                 self.dt = (self.dt * F_INC).min(DT_MAX * self.dt0);
                 self.alpha *= F_ALPHA;
             }
         } else {
             self.resets += 1;
-            self.uphill_free = 0;
+            self.downhill = 0;
             self.dt = (self.dt * F_DEC).max(self.dt0);
             self.alpha = ALPHA_START;
             sys.quench();
