@@ -8,7 +8,9 @@
 //! unchanged for `settle_time` with the kinetic and stress criteria met, then switches on background
 //! damping of the peculiar velocities and spins (and, optionally, tangential and rolling
 //! dashpots) until the criteria hold over a window. [`Relaxation`] reports what the damped
-//! phase changed: pairs gained and lost, ΔΦ and the largest grain displacement.
+//! phase changed: pairs gained and lost, ΔΦ and the largest grain displacement. With
+//! `relax.method = "fire"` (frictionless stages) FIRE acts after the switch instead of the
+//! damping ([`super::fire`]).
 
 use super::fire::{Fire, FireStats};
 use crate::geometry::{Dim, VectorOps as _};
