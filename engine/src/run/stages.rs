@@ -540,27 +540,16 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 write_checkpoint(ctx, spec, &h, &payload)?;
             }
         }
-        let relaxation = if watch.damping_on() {
-            watch.report(
-                t0,
-                &mut pair_list(&sys.interactions()),
-                sys.packing_fraction(),
-                &sys.s,
-                sys.cell.l,
+        // The final pairs are listed once, and only when a report compares with them.
+        let (relaxation, quench) = if watch.damping_on() || watch.quench.any() {
+            let pairs = &mut pair_list(&sys.interactions());
+            let (phi, s, l) = (sys.packing_fraction(), &sys.s, sys.cell.l);
+            (
+                watch.report(t0, pairs, phi, s, l),
+                watch.quench.report(t0, pairs, phi, s, l),
             )
         } else {
-            None
-        };
-        let quench = if watch.quench.any() {
-            watch.quench.report(
-                t0,
-                &mut pair_list(&sys.interactions()),
-                sys.packing_fraction(),
-                &sys.s,
-                sys.cell.l,
-            )
-        } else {
-            None
+            (None, None)
         };
         ctx.reports.push(StepReport {
             index: k,
