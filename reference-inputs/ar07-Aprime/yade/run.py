@@ -5,6 +5,7 @@
 # Deviations from the grainbench law and protocol:
 #   - hertz-damping: total normal force clipped at 0 without adhesion (no viscous pull while separating: restitution 0.423 instead of 0.335 at ζ = 0.3, 0.12 instead of capture at ζ = 0.98), a clipped contact loses its tangential force
 #   - stress-control: AR07 (7) cell dynamics and rate cap integrated by a script servo (PyRunner each step, O.cell.velGrad) on the contact stress only; PeriTriaxController hunted around 1.01–1.09 P
+#   - fire-relaxation: the deck runs the law's own dynamics to the criteria, AR07's protocol, in place of FIRE (no FIRE with the cell among its degrees of freedom is generated); on AR07 A the FIRE states are the same to ΔΦ < 1e-5, z* within about one seed s.d. (docs/performance.md)
 # Run: yade -n -x run.py (in this directory). Writes final.cell, final.bodies,
 # final.interactions, final.status (docs/external-formats/yade.md).
 
