@@ -16,6 +16,7 @@ pub mod init;
 pub mod library;
 pub mod neighbor;
 pub mod network;
+pub mod parallel;
 pub mod protocols;
 pub mod run;
 pub mod scene;

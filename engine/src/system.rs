@@ -2,7 +2,8 @@
 //! cell lengths (AR07 (7)), with the stress of AR07 (8).
 //!
 //! Every parallel loop runs over fixed chunks and reduces in chunk order, so for a given seed
-//! results are bit-for-bit identical for any number of threads.
+//! results are bit-for-bit identical for any number of threads; the chunks are handed out as
+//! one contiguous piece per thread (engine/src/parallel.rs).
 
 use crate::cell::Cell;
 use crate::contact::hertz_mindlin::HertzMindlin;
@@ -11,6 +12,7 @@ use crate::contact::slider::{Coulomb, NoSlip};
 use crate::contact::{ContactLaw, Pair, PairForce};
 use crate::geometry::{add_outer, Dim, Tensor, VectorOps};
 use crate::neighbor::{branch, wrap_moved, NeighborList, ROW_CHUNK};
+use crate::parallel::{balanced_cuts, piece_len};
 use rayon::prelude::*;
 use std::any::{Any, TypeId};
 
@@ -226,6 +228,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         let h = 0.5 * dt;
         let erate = self.cell.velocity_strain_rate();
         let inv_l = D::div(ones::<D>(), self.cell.l);
+        let piece = piece_len(self.s.len().div_ceil(GRAIN_CHUNK));
         let maxd = {
             let force = &self.force;
             let torque = &self.torque;
@@ -237,6 +240,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                 .zip(self.disp.par_chunks_mut(GRAIN_CHUNK))
                 .zip(self.w.par_chunks_mut(GRAIN_CHUNK))
                 .enumerate()
+                .with_min_len(piece)
                 .map(|(c, (((s, u), disp), w))| {
                     let base = c * GRAIN_CHUNK;
                     let mut m: f64 = 0.0;
@@ -416,10 +420,22 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                 });
             }
         }
+        // One group of consecutive chunks per thread, of nearly equal pair counts.
+        let cuts = balanced_cuts(&jobs.iter().map(|j| j.f.len()).collect::<Vec<_>>());
+        let mut groups = Vec::with_capacity(cuts.len() - 1);
+        for w in cuts.windows(2).rev() {
+            groups.push(jobs.split_off(w[0]));
+        }
+        groups.reverse();
         let this = &*self;
-        let sums: Vec<ChunkSum> = jobs
+        let sums: Vec<Vec<ChunkSum>> = groups
             .into_par_iter()
-            .map(|job| this.force_chunk(job, &erate, range, dt))
+            .map(|group| {
+                group
+                    .into_iter()
+                    .map(|job| this.force_chunk(job, &erate, range, dt))
+                    .collect()
+            })
             .collect();
         self.nlist.history = history;
         self.pair_force = pair_force;
@@ -427,7 +443,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         self.pair_roll = pair_roll;
         let mut virial = [[0.0; 3]; 3];
         let mut overlap = (0.0, 0, 0);
-        for s in &sums {
+        for s in sums.iter().flatten() {
             add_tensor(&mut virial, &s.virial);
             if s.overlap.0 > overlap.0 || s.overlap.0.is_nan() {
                 overlap = s.overlap;
@@ -541,6 +557,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         let inv_mass = &self.inv_mass;
         let mass = &self.mass;
         let inv_i = &self.inv_inertia;
+        let piece = piece_len(self.force.len().div_ceil(GRAIN_CHUNK));
         let kin: Vec<Tensor> = self
             .force
             .par_chunks_mut(GRAIN_CHUNK)
@@ -548,6 +565,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             .zip(self.torque.par_chunks_mut(GRAIN_CHUNK))
             .zip(self.w.par_chunks_mut(GRAIN_CHUNK))
             .enumerate()
+            .with_min_len(piece)
             .map(|(c, (((force, u), torque), w))| {
                 let base = c * GRAIN_CHUNK;
                 let mut kv = [[0.0; 3]; 3];
