@@ -422,11 +422,11 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         }
         // One group of consecutive chunks per thread, of nearly equal pair counts.
         let cuts = balanced_cuts(&jobs.iter().map(|j| j.f.len()).collect::<Vec<_>>());
-        let mut groups = Vec::with_capacity(cuts.len() - 1);
-        for w in cuts.windows(2).rev() {
-            groups.push(jobs.split_off(w[0]));
-        }
-        groups.reverse();
+        let mut jobs = jobs.into_iter();
+        let groups: Vec<Vec<_>> = cuts
+            .windows(2)
+            .map(|w| jobs.by_ref().take(w[1] - w[0]).collect())
+            .collect();
         let this = &*self;
         let sums: Vec<Vec<ChunkSum>> = groups
             .into_par_iter()
