@@ -359,6 +359,18 @@ pub fn finish(
     }
 }
 
+/// Why a supervised child gave no result: killed at `time_limit`, or its exit status with the
+/// failure line of its `stderr.log` in `dir`.
+pub fn why_failed(status: Option<std::process::ExitStatus>, dir: &Path, time_limit: f64) -> String {
+    match status {
+        None => format!("killed after the time limit of {time_limit} s"),
+        Some(s) => format!(
+            "exited with {s}: {:?}",
+            failure_line(&dir.join("stderr.log"))
+        ),
+    }
+}
+
 /// The line of a log saying why a process failed: a Rust panic's message or an `error:`
 /// line, else the last line.
 pub fn failure_line(path: &Path) -> String {

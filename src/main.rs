@@ -257,7 +257,8 @@ enum Command {
     /// Time a scene in our engine and in LAMMPS, LIGGGHTS and YADE from the same start, runs
     /// alternated, each code a child process: particle-steps/s, time and steps to equilibrium
     /// (or `--steps S` fixed steps), peak RSS, ratio to ours (bench.md/csv/json). `--scale
-    /// N,…` times our engine alone on dense packings of growing size (scale.md/csv/json/svg).
+    /// N,…` times our engine alone on dense packings of growing size (scale.md/csv/json/svg);
+    /// `--memory N,…` measures the peak memory per particle of whole runs (memory.md/json).
     Bench(bench::Args),
 }
 
@@ -283,6 +284,7 @@ enum GoldenAction {
 }
 
 fn main() {
+    large_blocks_mapped();
     let cli = Cli::parse();
     let code = match dispatch(cli) {
         Ok(code) => code,
@@ -292,6 +294,19 @@ fn main() {
         }
     };
     std::process::exit(code);
+}
+
+/// glibc's allocator: every block of 128 KiB or more (the per-grain and per-pair arrays of
+/// any sizeable packing) in a mapping of its own, unmapped when freed and grown by `mremap`.
+/// By default glibc raises that threshold after the first large block is freed and then
+/// carves large arrays from the heap, which keeps what the preparation, the checks and the
+/// output freed resident for the rest of the run (issue 15: peak memory per particle).
+fn large_blocks_mapped() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets an allocator parameter; called before any thread starts.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 128 * 1024);
+    }
 }
 
 fn dispatch(cli: Cli) -> Result<i32> {

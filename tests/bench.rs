@@ -238,6 +238,41 @@ fn scale_sweep_writes_table_and_plot() {
     }
 }
 
+/// `--memory`: each size is a whole `grainbench run` from a dense start (checkpoint at every
+/// check, final snapshot, report); its peak RSS and the growth per particle between sizes
+/// are recorded, and the run itself ended as it should.
+#[test]
+fn memory_sweep_records_whole_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m");
+    Command::cargo_bin("grainbench")
+        .unwrap()
+        .args(["bench", "--memory", "200,400", "-q", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+    let doc = json(&out.join("memory.json"));
+    let points = doc["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2);
+    assert!(points[0]["slope_bytes_per_particle"].is_null());
+    assert!(points[1]["slope_bytes_per_particle"].as_f64().is_some());
+    for p in points {
+        assert!(p["peak_rss_bytes"].as_u64().unwrap() > 1 << 20, "{p}");
+        assert!(p["steps"].as_u64().unwrap() > 0, "{p}");
+        let n = p["n"].as_u64().unwrap();
+        let run = out.join("runs").join(format!("n{n}")).join("run");
+        assert!(
+            run.join("final.snap.json").exists(),
+            "N = {n}: no final snapshot"
+        );
+        // The checkpoint of a completed run is removed.
+        assert!(!run.join("checkpoint.bin").exists(), "N = {n}");
+    }
+    assert!(std::fs::read_to_string(out.join("memory.md"))
+        .unwrap()
+        .contains("above the previous size"));
+}
+
 /// GRC07 type 2 (adhesion, no rolling resistance) at N = 100: LAMMPS runs the bench-only
 /// table deck (diameters in size classes, attraction by `pair_style table`) for the same
 /// fixed steps, marked approximate.

@@ -10,11 +10,15 @@
 ///
 /// # Panics
 /// If an edge names a grain ≥ `n` or has a branch shorter than `lengths`.
-pub fn wrapped_axes<B: AsRef<[f64]>>(
+pub fn wrapped_axes<B, T>(
     lengths: &[f64],
     n: usize,
     edges: impl IntoIterator<Item = (usize, usize, B)>,
-) -> Vec<bool> {
+) -> Vec<bool>
+where
+    B: std::ops::Deref<Target = T>,
+    T: std::ops::Index<usize, Output = f64> + ?Sized,
+{
     let d = lengths.len();
     // Adjacency in compressed rows: (neighbour, edge index, sign of the branch).
     let edges: Vec<(usize, usize, B)> = edges.into_iter().collect();
@@ -27,11 +31,12 @@ pub fn wrapped_axes<B: AsRef<[f64]>>(
         start[k + 1] += start[k];
     }
     let mut fill = start.clone();
-    let mut adj = vec![(0usize, 0usize, 1.0f64); start[n]];
+    // 32-bit indices: this runs on the first check of large packings (peak memory).
+    let mut adj = vec![(0u32, 0u32, 1.0f64); start[n]];
     for (e, &(i, j, _)) in edges.iter().enumerate() {
-        adj[fill[i]] = (j, e, 1.0);
+        adj[fill[i]] = (j as u32, e as u32, 1.0);
         fill[i] += 1;
-        adj[fill[j]] = (i, e, -1.0);
+        adj[fill[j]] = (i as u32, e as u32, -1.0);
         fill[j] += 1;
     }
     // Breadth-first walk: each grain gets an unwrapped position (`offset`, d values a grain)
@@ -49,7 +54,8 @@ pub fn wrapped_axes<B: AsRef<[f64]>>(
         queue.push_back(first);
         while let Some(i) = queue.pop_front() {
             for &(j, e, sign) in &adj[start[i]..start[i + 1]] {
-                let branch = edges[e].2.as_ref();
+                let (j, e) = (j as usize, e as usize);
+                let branch = &*edges[e].2;
                 for a in 0..d {
                     let reached = offset[i * d + a] + sign * branch[a];
                     if !placed[j] {

@@ -106,14 +106,25 @@ impl Snapshot {
     /// Reads and checks a snapshot file.
     pub fn read(path: &Path) -> Result<Snapshot, SnapshotError> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|error| SnapshotError::Io {
+        let io = |error| SnapshotError::Io {
             path: p.clone(),
             error,
-        })?;
-        let snap: Snapshot = serde_json::from_str(&text).map_err(|e| SnapshotError::Parse {
-            path: p.clone(),
-            message: parse_message(&text, &e),
-        })?;
+        };
+        // Parsed from the file as it is read: the text of a large snapshot (≈ 600 B a grain)
+        // is not held beside the parsed one. The text is read only to explain an error.
+        let file = std::fs::File::open(path).map_err(io)?;
+        let parsed = serde_json::from_reader(std::io::BufReader::with_capacity(1 << 16, file));
+        let snap: Snapshot = match parsed {
+            Ok(snap) => snap,
+            Err(e) if e.is_io() => return Err(io(std::io::Error::other(e))),
+            Err(e) => {
+                let text = std::fs::read_to_string(path).map_err(io)?;
+                return Err(SnapshotError::Parse {
+                    path: p.clone(),
+                    message: parse_message(&text, &e),
+                });
+            }
+        };
         snap.check()
             .map_err(|message| SnapshotError::Invalid { path: p, message })?;
         Ok(snap)
@@ -260,14 +271,30 @@ impl Snapshot {
     /// Writes the snapshot atomically (temporary file in the same directory, then rename), so
     /// an interrupted write never leaves a truncated file in place of a good one.
     pub fn write(&self, path: &Path) -> Result<(), SnapshotError> {
-        let text = serde_json::to_string(self).map_err(|e| SnapshotError::Invalid {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        write_atomic(path, text.as_bytes()).map_err(|error| SnapshotError::Io {
-            path: path.display().to_string(),
-            error,
-        })
+        // Streamed into the file: the JSON text of a large packing (≈ 1 KB a grain) is never
+        // held in memory (issue 15, peak memory).
+        let mut invalid = None;
+        let written = write_atomic_with(path, |w| {
+            serde_json::to_writer(&mut *w, self).map_err(|e| {
+                if e.is_io() {
+                    std::io::Error::other(e)
+                } else {
+                    invalid = Some(e.to_string());
+                    std::io::Error::other("not encodable")
+                }
+            })
+        });
+        match (written, invalid) {
+            (_, Some(message)) => Err(SnapshotError::Invalid {
+                path: path.display().to_string(),
+                message,
+            }),
+            (Err(error), None) => Err(SnapshotError::Io {
+                path: path.display().to_string(),
+                error,
+            }),
+            (Ok(()), None) => Ok(()),
+        }
     }
 
     /// Solid fraction Φ.
@@ -309,13 +336,24 @@ fn parse_message(text: &str, e: &serde_json::Error) -> String {
 
 /// Writes `bytes` to `path` atomically: temporary file beside it, flushed, then renamed.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// As [`write_atomic`], with the content streamed by `fill` through a buffered writer (large
+/// outputs need not be assembled in memory first). Nothing replaces `path` when `fill` fails.
+pub fn write_atomic_with(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
         _ => std::path::PathBuf::from("."),
     };
     std::fs::create_dir_all(&dir)?;
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir)?;
-    tmp.write_all(bytes)?;
+    let tmp = tempfile::NamedTempFile::new_in(&dir)?;
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, tmp);
+    fill(&mut w)?;
+    let tmp = w.into_inner().map_err(|e| e.into_error())?;
     tmp.as_file().sync_all()?;
     // Temporary files are private (0600); results are ordinary files.
     #[cfg(unix)]

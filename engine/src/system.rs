@@ -62,6 +62,8 @@ pub struct System<D: Dim, L: ContactLaw<D>> {
     /// `GRAINBENCH_SCALAR` is unset; `contact::hertz_mindlin_avx`); `false` keeps the scalar
     /// reference path.
     pub simd: bool,
+    /// Set by [`System::shed_step_buffers`]: the system can be read, no longer stepped.
+    shed: bool,
 }
 
 /// One chunk of rows of the force pass, with its slices of the per-pair arrays.
@@ -131,6 +133,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             max_disp: 0.0,
             r_max: 0.0,
             simd: hertz_mindlin_avx::wanted(),
+            shed: false,
         };
         sys.r_max = sys.radius.iter().cloned().fold(0.0, f64::max);
         for x in sys.s.iter_mut() {
@@ -176,6 +179,25 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         }
     }
 
+    /// Frees what only stepping uses (per-pair forces, net forces and moments, displacements,
+    /// inverse masses, the list's transposed index) once a run is over, so that the final
+    /// snapshot is built beside a smaller system (issue 15, peak memory). Positions,
+    /// velocities, the list with its history, the virials and [`System::interactions`] stay;
+    /// [`System::step`] refuses to run afterwards.
+    pub(crate) fn shed_step_buffers(&mut self) {
+        self.shed = true;
+        for v in [&mut self.pair_force, &mut self.force, &mut self.disp] {
+            *v = Vec::new();
+        }
+        for v in [&mut self.pair_cross, &mut self.pair_roll, &mut self.torque] {
+            *v = Vec::new();
+        }
+        self.inv_mass = Vec::new();
+        self.inv_inertia = Vec::new();
+        self.nlist.col_start = Vec::new();
+        self.nlist.col_pair = Vec::new();
+    }
+
     /// Checks that the cell is large enough for the minimum-image convention.
     pub fn check_cell(&self) -> Result<(), String> {
         let reach = self.reach();
@@ -202,6 +224,10 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
 
     /// One velocity-Verlet step: half kick, drift, forces, half kick (grains and cell).
     pub fn step(&mut self) {
+        assert!(
+            !self.shed,
+            "a system is not stepped after shed_step_buffers"
+        );
         let dt = self.dt;
         self.kick_drift();
         // Cell: its rates were kicked at the end of the previous step (leapfrog); drift.
@@ -658,8 +684,20 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// Every interacting pair with its forces, evaluated on the current state without
     /// advancing any history.
     pub fn interactions(&self) -> Vec<Interaction<D>> {
-        let erate = self.cell.velocity_strain_rate();
         let mut out = Vec::new();
+        self.interactions_into(&mut out);
+        out
+    }
+
+    /// [`System::interactions`] into `out` (cleared first), reusing its allocation.
+    pub fn interactions_into(&self, out: &mut Vec<Interaction<D>>) {
+        out.clear();
+        self.for_each_interaction(|c| out.push(c));
+    }
+
+    /// [`System::interactions`] one at a time, in the same order, without collecting them.
+    pub fn for_each_interaction(&self, mut f: impl FnMut(Interaction<D>)) {
+        let erate = self.cell.velocity_strain_rate();
         for i in 0..self.len() {
             for p in self.nlist.row(i) {
                 let j = self.nlist.partner[p] as usize;
@@ -670,7 +708,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                 let pf = self.law.interact(&pair, &mut hist, 0.0);
                 if pf.normal != 0.0 || pf.normal_elastic != 0.0 || pair.gap < 0.0 {
                     let (t, g) = self.law.stored(&self.nlist.history[p]);
-                    out.push(Interaction {
+                    f(Interaction {
                         i,
                         j,
                         branch: r,
@@ -683,7 +721,6 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
                 }
             }
         }
-        out
     }
 }
 
@@ -777,6 +814,29 @@ pub struct State<D: Dim, H> {
     max_disp: f64,
 }
 
+/// [`State`] borrowed from a running system: serializes to the same bytes as the copy
+/// [`System::state`] returns, without the copy (a checkpoint streams it to disk).
+#[derive(serde::Serialize)]
+#[serde(bound(serialize = "H: serde::Serialize"))]
+pub struct StateRef<'a, D: Dim, H> {
+    cell: &'a Cell<D>,
+    s: &'a [D::V],
+    u: &'a [D::V],
+    w: &'a [D::Ang],
+    radius: &'a [f64],
+    force: &'a [D::V],
+    torque: &'a [D::Ang],
+    disp: &'a [D::V],
+    nlist: &'a NeighborList<H>,
+    contact_virial: &'a Tensor,
+    kinetic_virial: &'a Tensor,
+    max_overlap: (f64, u32, u32),
+    dt: f64,
+    time: f64,
+    step: u64,
+    max_disp: f64,
+}
+
 impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// A copy of the complete state.
     pub fn state(&self) -> State<D, L::History> {
@@ -792,6 +852,28 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             nlist: self.nlist.clone(),
             contact_virial: self.contact_virial,
             kinetic_virial: self.kinetic_virial,
+            max_overlap: self.max_overlap,
+            dt: self.dt,
+            time: self.time,
+            step: self.step,
+            max_disp: self.max_disp,
+        }
+    }
+
+    /// The complete state, borrowed (what [`System::state`] copies).
+    pub fn state_ref(&self) -> StateRef<'_, D, L::History> {
+        StateRef {
+            cell: &self.cell,
+            s: &self.s,
+            u: &self.u,
+            w: &self.w,
+            radius: &self.radius,
+            force: &self.force,
+            torque: &self.torque,
+            disp: &self.disp,
+            nlist: &self.nlist,
+            contact_virial: &self.contact_virial,
+            kinetic_virial: &self.kinetic_virial,
             max_overlap: self.max_overlap,
             dt: self.dt,
             time: self.time,

@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::Ordering;
 
+mod memory;
 mod report;
 mod scale;
 mod setup;
@@ -55,6 +56,15 @@ pub struct Args {
     /// Scale sweep of our engine: dense 3D Hertz–Mindlin packings of these sizes.
     #[arg(long, value_delimiter = ',', value_name = "N,…")]
     pub scale: Vec<usize>,
+    /// Peak memory of whole `grainbench run`s (preparation, checks, checkpoints, output) on
+    /// dense 3D Hertz–Mindlin packings of these sizes, per particle (memory.md/json).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "N,…",
+        conflicts_with = "scale"
+    )]
+    pub memory: Vec<usize>,
     /// No progress lines.
     #[arg(long, short)]
     pub quiet: bool,
@@ -102,8 +112,26 @@ pub fn bench(a: &Args) -> Result<i32> {
             quiet: a.quiet,
         });
     }
+    if !a.memory.is_empty() {
+        if a.scene.is_some() {
+            bail!("--memory runs our engine on its own packings: give no scene with it");
+        }
+        if !a.codes.is_empty() && a.codes.iter().any(|c| c != "rust") {
+            bail!("--memory runs our engine only (--codes rust)");
+        }
+        if a.threads.len() != 1 {
+            bail!("--memory: give one thread count (--threads T)");
+        }
+        return memory::sweep(
+            &a.memory,
+            a.threads[0],
+            a.out.as_deref(),
+            a.time_limit,
+            a.quiet,
+        );
+    }
     let Some(spec) = &a.scene else {
-        bail!("give a scene (`grainbench bench xcode-smoke`) or --scale N,…");
+        bail!("give a scene (`grainbench bench xcode-smoke`), --scale N,… or --memory N,…");
     };
     bench_scene(a, spec)
 }

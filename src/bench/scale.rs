@@ -75,7 +75,7 @@ pub fn tiling(n: usize) -> (usize, usize) {
 /// Gas at Φ = 0.3 compressed at P = 1 with a large strain-rate cap (0.1) until Φ ≥ 0.58
 /// (`run::compress_until`, as the step benchmark prepares its packings): a dense random
 /// packing, its reduced positions and cell lengths.
-fn random_packing(n: usize) -> Result<(Vec<<D3 as Dim>::V>, <D3 as Dim>::V)> {
+pub(super) fn random_packing(n: usize) -> Result<(Vec<<D3 as Dim>::V>, <D3 as Dim>::V)> {
     let text = format!(
         "name = \"scale-base\"\ndimension = 3\nseed = 7\n[particles]\ncount = {n}\n\
          [law]\nkind = \"hertz-mindlin\"\nkappa = 39000.0\nmu = 0.3\nzeta = 0.98\n\
@@ -91,7 +91,7 @@ fn random_packing(n: usize) -> Result<(Vec<<D3 as Dim>::V>, <D3 as Dim>::V)> {
 
 /// `k`×`k`×`k` periodic copies of a packing (reduced positions `s`, lengths `l`): a valid
 /// packing of k³ times as many grains, made in O(N).
-fn tile(
+pub(super) fn tile(
     s: &[<D3 as Dim>::V],
     l: <D3 as Dim>::V,
     k: usize,
@@ -282,13 +282,7 @@ pub fn sweep(a: &Sweep) -> Result<i32> {
                     points.push(p);
                 }
                 (status, _) => {
-                    let why = match status {
-                        None => format!("killed after the time limit of {} s", a.time_limit),
-                        Some(s) => format!(
-                            "exited with {s}: {:?}",
-                            external::failure_line(&dir.join("stderr.log"))
-                        ),
-                    };
+                    let why = external::why_failed(status, &dir, a.time_limit);
                     eprintln!("  N ≈ {n}, {t} thread(s): {why}; logs in {}", dir.display());
                     failures.push(format!("N ≈ {n}, {t} thread(s): {why}"));
                 }

@@ -351,18 +351,29 @@ pub fn bond_order(
     let global = |l: usize, sum: &[f64]| (nb > 0).then(|| q_norm(l, sum) / nb as f64);
 
     // Crystalline bonds, AR07 (33)–(34).
-    let unit6: Vec<Option<[f64; 13]>> =
+    // |q6| of each grain (NaN where q6 vanishes or is not finite: no crystalline bond); the
+    // product of the unit vectors is taken pair by pair, without a normalized copy of q6.
+    let norm6: Vec<f64> =
         b.q6.iter()
             .map(|q| {
                 let s = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-                (s > 0.0 && s.is_finite()).then(|| q.map(|x| x / s))
+                if s > 0.0 && s.is_finite() {
+                    s
+                } else {
+                    f64::NAN
+                }
             })
             .collect();
     let mut cr_of = vec![0usize; n];
     let mut crystalline_bonds = 0;
     for &(i, j) in &b.pairs {
-        if let (Some(qi), Some(qj)) = (&unit6[i], &unit6[j]) {
-            let s: f64 = qi.iter().zip(qj).map(|(x, y)| x * y).sum();
+        if !(norm6[i].is_nan() || norm6[j].is_nan()) {
+            let (qi, qj) = (&b.q6[i], &b.q6[j]);
+            let s: f64 = qi
+                .iter()
+                .zip(qj)
+                .map(|(x, y)| (x / norm6[i]) * (y / norm6[j]))
+                .sum();
             if s.abs() >= CRYSTALLINE_PRODUCT {
                 crystalline_bonds += 1;
                 cr_of[i] += 1;

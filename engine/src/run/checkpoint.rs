@@ -12,6 +12,7 @@
 use super::report::StepReport;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
+use std::io::Write;
 use std::path::Path;
 
 pub const FORMAT: &str = "grainbench-checkpoint";
@@ -94,12 +95,42 @@ impl Checkpoint {
             .map_err(|e| format!("checkpoint holds an unreadable scene: {e}"))
     }
 
-    /// Writes header and payload atomically.
-    pub fn write(path: &Path, header: &Header, payload: &[u8]) -> std::io::Result<()> {
-        let mut bytes = bincode::serialize(&(header, payload)).map_err(std::io::Error::other)?;
-        let crc = crc32fast::hash(&bytes);
-        bytes.extend_from_slice(&crc.to_le_bytes());
-        crate::snapshot::write_atomic(path, &bytes)
+    /// Writes header and payload atomically, streamed: the bytes are those of
+    /// `bincode::serialize(&(header, encode(payload)))` and its CRC, but neither the encoded
+    /// state nor the file is assembled in memory (a copy of the state would double the peak
+    /// memory of a large run at every checkpoint; issue 15).
+    pub fn write<P: Serialize>(path: &Path, header: &Header, payload: &P) -> std::io::Result<()> {
+        let len = bincode::serialized_size(payload).map_err(std::io::Error::other)?;
+        crate::snapshot::write_atomic_with(path, |w| {
+            let mut w = Crc {
+                inner: w,
+                hasher: crc32fast::Hasher::new(),
+            };
+            bincode::serialize_into(&mut w, header).map_err(std::io::Error::other)?;
+            // The payload is a byte vector inside the file: its length, then its bytes.
+            w.write_all(&len.to_le_bytes())?;
+            bincode::serialize_into(&mut w, payload).map_err(std::io::Error::other)?;
+            let crc = w.hasher.finalize();
+            w.inner.write_all(&crc.to_le_bytes())
+        })
+    }
+}
+
+/// A writer that hashes what passes through it (the checkpoint's closing CRC-32).
+struct Crc<'a> {
+    inner: &'a mut dyn Write,
+    hasher: crc32fast::Hasher,
+}
+
+impl Write for Crc<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.hasher.update(&buf[..n]);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
     }
 }
 
@@ -146,11 +177,12 @@ mod tests {
     fn damaged_checkpoints_are_refused() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("checkpoint.bin");
-        let payload: Vec<u8> = (0..200u8).collect();
-        Checkpoint::write(&path, &header(VERSION), &payload).unwrap();
+        let state: Vec<u64> = (0..200u64).map(|k| k * k).collect();
+        Checkpoint::write(&path, &header(VERSION), &state).unwrap();
         let good = std::fs::read(&path).unwrap();
         let cp = Checkpoint::read(&path).unwrap();
-        assert_eq!((cp.payload, cp.header.stage), (payload.clone(), 1));
+        assert_eq!((cp.payload.clone(), cp.header.stage), (encode(&state), 1));
+        assert_eq!(decode::<Vec<u64>>(&cp.payload).unwrap(), state);
         for k in (0..good.len()).step_by(7).chain([good.len() - 1]) {
             let mut bad = good.clone();
             bad[k] ^= 0x10;
@@ -160,6 +192,25 @@ mod tests {
         }
         std::fs::write(&path, &good[..good.len() - 9]).unwrap();
         assert!(Checkpoint::read(&path).unwrap_err().contains("damaged"));
+    }
+
+    /// The streamed file has the layout of the one assembled in memory before (bincode of
+    /// the header and the encoded state as a byte vector, then the CRC-32 of all of it), so
+    /// checkpoints of version 7 stay readable both ways.
+    #[test]
+    fn streamed_checkpoints_keep_the_file_layout() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("checkpoint.bin");
+        let state = (
+            vec![[1.5f64, -2.0, 3.25]; 40],
+            Some(7u32),
+            "watch".to_string(),
+        );
+        Checkpoint::write(&path, &header(VERSION), &state).unwrap();
+        let mut expected = bincode::serialize(&(header(VERSION), encode(&state))).unwrap();
+        let crc = crc32fast::hash(&expected);
+        expected.extend_from_slice(&crc.to_le_bytes());
+        assert_eq!(std::fs::read(&path).unwrap(), expected);
     }
 
     /// Checkpoints of an older version (5: a stage watch without the quench log) are refused

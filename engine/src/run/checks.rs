@@ -10,8 +10,38 @@ use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
 use crate::system::{self, System};
 
+/// An interacting pair as the checks see it (12 bytes instead of a whole
+/// [`system::Interaction`]: the list is rebuilt at every check of large packings).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Link {
+    pub i: u32,
+    pub j: u32,
+    /// In contact (gap < 0); a distant attraction is not.
+    pub touching: bool,
+}
+
+impl Link {
+    /// The pair as (smaller index, larger index).
+    pub fn pair(&self) -> (u32, u32) {
+        (self.i.min(self.j), self.i.max(self.j))
+    }
+}
+
+/// The interacting pairs of `sys` into `out` (cleared first, its allocation reused), in the
+/// order of [`System::interactions`].
+pub(super) fn links_into<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, out: &mut Vec<Link>) {
+    out.clear();
+    sys.for_each_interaction(|c| {
+        out.push(Link {
+            i: c.i as u32,
+            j: c.j as u32,
+            touching: c.gap < 0.0,
+        })
+    });
+}
+
 /// Number of clusters of `n` grains linked by interactions (contacts or distant attractions).
-pub(super) fn clusters<D: Dim>(n: usize, inter: &[system::Interaction<D>]) -> usize {
+pub(super) fn clusters(n: usize, inter: &[Link]) -> usize {
     let mut parent: Vec<usize> = (0..n).collect();
     fn root(p: &mut [usize], mut i: usize) -> usize {
         while p[i] != i {
@@ -22,7 +52,10 @@ pub(super) fn clusters<D: Dim>(n: usize, inter: &[system::Interaction<D>]) -> us
     }
     let mut count = n;
     for c in inter {
-        let (a, b) = (root(&mut parent, c.i), root(&mut parent, c.j));
+        let (a, b) = (
+            root(&mut parent, c.i as usize),
+            root(&mut parent, c.j as usize),
+        );
         if a != b {
             parent[a] = b;
             count -= 1;
@@ -113,7 +146,7 @@ pub(super) fn stopped<D: Dim, L: ContactLaw<D>>(
 pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
     num: &StageNumerics,
-    inter: &[system::Interaction<D>],
+    inter: &[Link],
     checks: &Checks,
     free_rollers: bool,
     factor: f64,
@@ -135,14 +168,14 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     let touching = touching(sys.len(), inter);
     let mut degree = vec![0u32; sys.len()];
     for c in inter {
-        degree[c.i] += 1;
-        degree[c.j] += 1;
+        degree[c.i as usize] += 1;
+        degree[c.j as usize] += 1;
     }
     let roller = |i: usize| degree[i] == 1;
     let pairs = inter
         .iter()
-        .filter(|c| !roller(c.i) && !roller(c.j))
-        .map(|c| (c.i.min(c.j) as u32, c.i.max(c.j) as u32))
+        .filter(|c| !roller(c.i as usize) && !roller(c.j as usize))
+        .map(Link::pair)
         .collect();
     let ke: f64 = (0..sys.len())
         .filter(|&i| !roller(i))
@@ -166,11 +199,11 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
 }
 
 /// Grains in contact with another one (gap < 0; a distant attraction does not count).
-fn touching<D: Dim>(n: usize, inter: &[system::Interaction<D>]) -> Vec<bool> {
+fn touching(n: usize, inter: &[Link]) -> Vec<bool> {
     let mut touching = vec![false; n];
-    for c in inter.iter().filter(|c| c.gap < 0.0) {
-        touching[c.i] = true;
-        touching[c.j] = true;
+    for c in inter.iter().filter(|c| c.touching) {
+        touching[c.i as usize] = true;
+        touching[c.j as usize] = true;
     }
     touching
 }
@@ -187,11 +220,11 @@ fn kinetic_parts<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, i: usize) -> (f64
 }
 
 /// Equilibrium measures in units of the criteria of the stage, from the state and its
-/// interactions `inter` (`System::interactions`, computed once per check by the caller).
-pub fn measure<D: Dim, L: ContactLaw<D>>(
+/// interactions `inter` ([`links_into`], computed once per check by the caller).
+pub(super) fn measure<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
     num: &StageNumerics,
-    inter: &[system::Interaction<D>],
+    inter: &[Link],
 ) -> Checks {
     let f_ref = num.f_ref;
     let n = sys.len() as f64;
@@ -257,15 +290,15 @@ pub(super) fn contacts_at_threshold<D: Dim, L: ContactLaw<D>>(
     num: &StageNumerics,
 ) -> usize {
     let (mu, mu_r) = (num.mu.value(), num.mu_r);
-    sys.interactions()
-        .iter()
-        .filter(|c| {
-            c.gap < 0.0
-                && ((mu.is_finite()
-                    && mu > 0.0
-                    && c.tangential.norm() >= mu * c.normal_elastic * (1.0 - 1e-9))
-                    || (mu_r.is_finite()
-                        && c.rolling.norm() >= mu_r * c.normal_elastic * (1.0 - 1e-9)))
-        })
-        .count()
+    let mut count = 0;
+    sys.for_each_interaction(|c| {
+        let at = c.gap < 0.0
+            && ((mu.is_finite()
+                && mu > 0.0
+                && c.tangential.norm() >= mu * c.normal_elastic * (1.0 - 1e-9))
+                || (mu_r.is_finite()
+                    && c.rolling.norm() >= mu_r * c.normal_elastic * (1.0 - 1e-9)));
+        count += usize::from(at);
+    });
+    count
 }

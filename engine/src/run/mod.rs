@@ -24,7 +24,6 @@ pub mod stages;
 pub use crate::contact::from_scene::{
     adhesion, dmt_law, hertz_mindlin_law, linear_law, rolling_spring, sjkr_law,
 };
-pub use checks::measure;
 pub use numerics::StageNumerics;
 pub use options::{CheckpointSpec, DumpSpec, RunOptions, StageEndHook};
 pub use output::snapshot_of;
@@ -46,7 +45,7 @@ use crate::snapshot::Snapshot;
 use crate::system::System;
 use checkpoint::Header;
 use checks::contacts_at_threshold;
-use stages::{hard_stage, run_stages, write_checkpoint, Ctx, Payload};
+use stages::{hard_stage, run_stages, write_checkpoint, Ctx, Payload, PayloadRef};
 
 /// Runs a validated scene to the end of its protocol (or from a checkpoint to the end).
 ///
@@ -96,7 +95,7 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
         if !step.is_dem() {
             if let Some(spec) = &opts.checkpoint {
                 let h = ctx.header(k, false, ctx.grains.time, ctx.grains.step, 0.0);
-                let payload = checkpoint::encode(&Payload::<D, ()>::AtStart(ctx.grains.clone()));
+                let payload = PayloadRef::<D, ()>::AtStart(&ctx.grains);
                 write_checkpoint(&ctx, spec, &h, &payload)?;
             }
             hard_stage(&mut ctx, k, &step)?;
@@ -277,6 +276,7 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
     } else {
         "time-limit"
     };
+    sys.shed_step_buffers();
     let snap = snapshot_of(&sys, &scene.name, &num, status, ctx.pressure);
     ctx.grains = Grains {
         l: sys.cell.l,
@@ -295,6 +295,62 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
 mod tests {
     use super::*;
     use std::path::Path;
+
+    /// A small dense 3D packing with springs (μ = 0.3), compressed fast.
+    fn dense_3d() -> (
+        Scene,
+        System<D3, crate::contact::hertz_mindlin::HertzMindlin<Coulomb>>,
+    ) {
+        let text = r#"
+name = "shed"
+dimension = 3
+seed = 3
+[particles]
+count = 200
+[law]
+kind = "hertz-mindlin"
+kappa = 39000.0
+mu = 0.3
+zeta = 0.98
+[initial]
+packing_fraction = 0.3
+[numerics]
+cell_mass = 0.01
+[[protocol]]
+kind = "compress"
+pressure = 1.0
+inertia_cap = 0.1
+max_time = 5.0
+"#;
+        let scene = Scene::from_toml(text, Path::new("shed.toml")).unwrap();
+        let law = hertz_mindlin_law(&scene.law, Coulomb { mu: 0.3 });
+        let sys = compress_until::<D3, _>(&scene, law, 0.55).unwrap();
+        (scene, sys)
+    }
+
+    /// Shedding the step buffers before the final snapshot (issue 15, peak memory) leaves
+    /// the interactions and everything the snapshot reads as they were.
+    #[test]
+    fn shedding_the_step_buffers_keeps_the_snapshot() {
+        let (scene, mut sys) = dense_3d();
+        let num = StageNumerics::of_scene(&scene);
+        let before = snapshot_of(&sys, "shed", &num, "time-limit", Some(1.0));
+        assert!(before.contacts.len() > sys.len(), "a dense packing");
+        sys.shed_step_buffers();
+        let after = snapshot_of(&sys, "shed", &num, "time-limit", Some(1.0));
+        assert!(
+            before == after,
+            "the snapshot changed when the step buffers were shed"
+        );
+    }
+
+    #[test]
+    #[should_panic(expected = "shed_step_buffers")]
+    fn a_shed_system_is_not_stepped() {
+        let (_, mut sys) = dense_3d();
+        sys.shed_step_buffers();
+        sys.step();
+    }
 
     /// A protocol of hard-grain stages only ends with a snapshot of the law's contacts (found
     /// by tests/fuzz.rs: the first forces of that snapshot once looked up a stage past the end).

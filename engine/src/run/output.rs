@@ -28,10 +28,13 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
             .map(|a| (0..D::D).map(|b| t[a][b] / omega).collect())
             .collect()
     };
-    let contacts = sys
-        .interactions()
-        .into_iter()
-        .map(|c| snapshot::Contact {
+    // Counted first, so that the list is allocated once at its size (no doubling, no
+    // intermediate list of interactions: issue 15, peak memory of large packings).
+    let mut count = 0;
+    sys.for_each_interaction(|_| count += 1);
+    let mut contacts = Vec::with_capacity(count);
+    sys.for_each_interaction(|c| {
+        contacts.push(snapshot::Contact {
             i: c.i,
             j: c.j,
             branch: c.branch.to_vec(),
@@ -49,7 +52,7 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
             },
             gap: c.gap,
         })
-        .collect();
+    });
     Snapshot {
         format: snapshot::FORMAT.into(),
         version: snapshot::VERSION,

@@ -3,7 +3,8 @@
 
 use super::checkpoint::{self, Checkpoint, Header};
 use super::checks::{
-    contacts_at_threshold, measure, settle_view, step_correlation, stopped, unstable,
+    contacts_at_threshold, links_into, measure, settle_view, step_correlation, stopped, unstable,
+    Link,
 };
 use super::checks::{FLIP_CHECKS, FLIP_CORRELATION};
 use super::numerics::StageNumerics;
@@ -20,7 +21,7 @@ use crate::network;
 use crate::protocols::event_driven::HardSpheres;
 use crate::scene::{Scene, Step};
 use crate::snapshot::Snapshot;
-use crate::system::{Interaction, State, System};
+use crate::system::{State, StateRef, System};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -35,6 +36,14 @@ pub(super) enum Payload<D: Dim, H> {
     AtStart(Grains<D>),
     /// The integrator state and what the stage watches across its checks.
     Inside(State<D, H>, StageWatch<D>),
+}
+
+/// [`Payload`] borrowed, as a checkpoint writes it (the same bytes, no copy of the state).
+#[derive(serde::Serialize)]
+#[serde(bound(serialize = "H: serde::Serialize"))]
+pub(super) enum PayloadRef<'a, D: Dim, H> {
+    AtStart(&'a Grains<D>),
+    Inside(StateRef<'a, D, H>, &'a StageWatch<D>),
 }
 
 /// Bookkeeping carried through the stages.
@@ -119,7 +128,7 @@ pub(super) fn write_checkpoint<D: Dim>(
     ctx: &Ctx<D>,
     spec: &CheckpointSpec,
     header: &Header,
-    payload: &[u8],
+    payload: &impl serde::Serialize,
 ) -> Result<(), RunError> {
     Checkpoint::write(&spec.path, header, payload).map_err(|e| {
         ctx.setup_error(format!(
@@ -266,6 +275,9 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
     let ke0 = sys.kinetic_energy() / n;
     let mut last_good = None;
     sys.save(&mut last_good);
+    // The interacting pairs of the current check, one buffer for the whole run (a fresh list
+    // at every check would be allocated and faulted in again each time).
+    let mut inter = Vec::new();
     let stage_count = ctx.stages.len();
     for k in range {
         let step = ctx.stages[k].1.clone();
@@ -361,15 +373,17 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     ));
                 }
             }
-            let inter = sys.interactions();
+            links_into(sys, &mut inter);
             checks = measure(sys, &num, &inter);
             if let Some(cb) = opts.progress.as_mut() {
                 let stressed = matches!(sys.cell.control, Control::Stress { .. });
                 let wrapped_axes = (first_check && stressed).then(|| {
+                    let mut edges = Vec::with_capacity(inter.len());
+                    sys.for_each_interaction(|c| edges.push((c.i as u32, c.j as u32, c.branch)));
                     network::wrapped_axes(
                         &sys.cell.l.to_vec(),
                         sys.len(),
-                        inter.iter().map(|c| (c.i, c.j, c.branch.to_vec())),
+                        edges.iter().map(|(i, j, b)| (*i as usize, *j as usize, b)),
                     )
                 });
                 first_check = false;
@@ -513,10 +527,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 if ctx.last_checkpoint.elapsed().as_secs_f64() >= spec.every {
                     let wall = wall0 + step_start.elapsed().as_secs_f64();
                     let h = ctx.header(k, true, t0, steps0, wall);
-                    let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(
-                        sys.state(),
-                        watch.clone(),
-                    ));
+                    let payload = PayloadRef::Inside(sys.state_ref(), &watch);
                     write_checkpoint(ctx, spec, &h, &payload)?;
                     ctx.last_checkpoint = Instant::now();
                 }
@@ -533,16 +544,17 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             // Resumable from exactly here.
             if let Some(spec) = &opts.checkpoint {
                 let h = ctx.header(k, true, t0, steps0, wall);
-                let payload = checkpoint::encode(&Payload::<D, L::History>::Inside(
-                    sys.state(),
-                    watch.clone(),
-                ));
+                let payload = PayloadRef::Inside(sys.state_ref(), &watch);
                 write_checkpoint(ctx, spec, &h, &payload)?;
             }
         }
         // The final pairs are listed once, and only when a report compares with them.
         let (relaxation, quench) = if watch.damping_on() || watch.quench.any() {
-            let pairs = &mut pair_list(&sys.interactions());
+            let pairs = &mut {
+                let mut links = Vec::new();
+                links_into(sys, &mut links);
+                pair_list(&links)
+            };
             let (phi, s, l) = (sys.packing_fraction(), &sys.s, sys.cell.l);
             (
                 watch.report(t0, pairs, phi, s, l),
@@ -583,11 +595,8 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
 }
 
 /// Interacting pairs (i < j) of a list of interactions.
-fn pair_list<D: Dim>(inter: &[Interaction<D>]) -> Vec<(u32, u32)> {
-    inter
-        .iter()
-        .map(|c| (c.i.min(c.j) as u32, c.i.max(c.j) as u32))
-        .collect()
+fn pair_list(inter: &[Link]) -> Vec<(u32, u32)> {
+    inter.iter().map(Link::pair).collect()
 }
 
 /// The common start of a cross-code comparison: the scene's initial grains with its leading
