@@ -186,12 +186,12 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// [`System::step`] refuses to run afterwards.
     pub(crate) fn shed_step_buffers(&mut self) {
         self.shed = true;
-        for v in [&mut self.pair_force, &mut self.force, &mut self.disp] {
-            *v = Vec::new();
-        }
-        for v in [&mut self.pair_cross, &mut self.pair_roll, &mut self.torque] {
-            *v = Vec::new();
-        }
+        self.pair_force = Vec::new();
+        self.pair_cross = Vec::new();
+        self.pair_roll = Vec::new();
+        self.force = Vec::new();
+        self.torque = Vec::new();
+        self.disp = Vec::new();
         self.inv_mass = Vec::new();
         self.inv_inertia = Vec::new();
         self.nlist.col_start = Vec::new();
@@ -685,14 +685,8 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     /// advancing any history.
     pub fn interactions(&self) -> Vec<Interaction<D>> {
         let mut out = Vec::new();
-        self.interactions_into(&mut out);
-        out
-    }
-
-    /// [`System::interactions`] into `out` (cleared first), reusing its allocation.
-    pub fn interactions_into(&self, out: &mut Vec<Interaction<D>>) {
-        out.clear();
         self.for_each_interaction(|c| out.push(c));
+        out
     }
 
     /// [`System::interactions`] one at a time, in the same order, without collecting them.

@@ -29,7 +29,6 @@ const RUN_TIME: f64 = 0.3;
 pub struct Point {
     pub n: usize,
     pub steps: u64,
-    pub checkpoints_every_check: bool,
     pub peak_rss_bytes: u64,
     pub bytes_per_particle: f64,
     /// (peak − peak of the previous size) / (N − N of the previous size).
@@ -141,7 +140,6 @@ pub fn sweep(
                 let p = Point {
                     n,
                     steps,
-                    checkpoints_every_check: true,
                     peak_rss_bytes: peak,
                     bytes_per_particle: peak as f64 / n as f64,
                     slope_bytes_per_particle: slope,

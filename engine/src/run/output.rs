@@ -28,11 +28,9 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
             .map(|a| (0..D::D).map(|b| t[a][b] / omega).collect())
             .collect()
     };
-    // Counted first, so that the list is allocated once at its size (no doubling, no
-    // intermediate list of interactions: issue 15, peak memory of large packings).
-    let mut count = 0;
-    sys.for_each_interaction(|_| count += 1);
-    let mut contacts = Vec::with_capacity(count);
+    // Straight into the snapshot's list, without an intermediate list of interactions
+    // (issue 15, peak memory of large packings).
+    let mut contacts = Vec::new();
     sys.for_each_interaction(|c| {
         contacts.push(snapshot::Contact {
             i: c.i,
