@@ -28,7 +28,7 @@ use grainbench_comparisons::metrics::structure::default_gap_grid;
 use grainbench_comparisons::{find_rattlers, gap_coordination, pair_correlation, Rule};
 use grainbench_engine::geometry::{D2, D3};
 use grainbench_engine::init::random_gas;
-use grainbench_engine::snapshot::{Cell, Contact, Particles, Snapshot, FORMAT, VERSION};
+use grainbench_engine::snapshot::{Cell, Contact, Particles, Snapshot, Vector, FORMAT, VERSION};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -164,11 +164,11 @@ fn packed(d: usize, n: usize, phi: f64, cut: f64) -> Snapshot {
                 contacts.push(Contact {
                     i,
                     j,
-                    branch,
+                    branch: Vector::from_slice(&branch),
                     normal: 0.0,
                     normal_elastic: 0.0,
-                    tangential: vec![0.0; d],
-                    rolling: Vec::new(),
+                    tangential: Vector::from_elem(0.0, d),
+                    rolling: Vector::new(),
                     gap: gap.min(-1e-3),
                 });
             }
@@ -194,8 +194,8 @@ fn packed(d: usize, n: usize, phi: f64, cut: f64) -> Snapshot {
         },
         particles: Particles {
             mass: vec![1.0; n],
-            velocity: vec![vec![0.0; d]; n],
-            position,
+            velocity: vec![Vector::from_elem(0.0, d); n],
+            position: position.iter().map(|p| Vector::from_slice(p)).collect(),
             radius,
             angular_velocity: Vec::new(),
         },

@@ -35,6 +35,8 @@ pub trait VectorOps:
     fn is_finite(&self) -> bool;
     /// Components as a slice-like vector (for snapshots).
     fn to_vec(&self) -> Vec<f64>;
+    /// Components stored inline (a snapshot's [`crate::snapshot::Vector`]).
+    fn components(&self) -> smallvec::SmallVec<[f64; 3]>;
     /// From its components (as many as [`VectorOps::to_vec`] gives).
     fn from_components(x: &[f64]) -> Self;
 }
@@ -54,6 +56,9 @@ impl VectorOps for f64 {
     }
     fn to_vec(&self) -> Vec<f64> {
         vec![*self]
+    }
+    fn components(&self) -> smallvec::SmallVec<[f64; 3]> {
+        smallvec::smallvec![*self]
     }
     fn from_components(x: &[f64]) -> Self {
         x[0]
@@ -77,6 +82,9 @@ macro_rules! impl_linear_vec {
             }
             fn to_vec(&self) -> Vec<f64> {
                 self.iter().copied().collect()
+            }
+            fn components(&self) -> smallvec::SmallVec<[f64; 3]> {
+                smallvec::SmallVec::from_slice(self.as_slice())
             }
             fn from_components(x: &[f64]) -> Self {
                 <$t>::from_column_slice(x)

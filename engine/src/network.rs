@@ -10,20 +10,21 @@
 ///
 /// # Panics
 /// If an edge names a grain ≥ `n` or has a branch shorter than `lengths`.
-pub fn wrapped_axes<B, T>(
+pub fn wrapped_axes<E, B>(
     lengths: &[f64],
     n: usize,
-    edges: impl IntoIterator<Item = (usize, usize, B)>,
+    edges: &[E],
+    ends: impl Fn(&E) -> (usize, usize, B),
 ) -> Vec<bool>
 where
-    B: std::ops::Deref<Target = T>,
-    T: std::ops::Index<usize, Output = f64> + ?Sized,
+    B: std::ops::Index<usize, Output = f64>,
 {
     let d = lengths.len();
-    // Adjacency in compressed rows: (neighbour, edge index, sign of the branch).
-    let edges: Vec<(usize, usize, B)> = edges.into_iter().collect();
+    // Adjacency in compressed rows: the indices of each grain's edges (32 bits: this runs on
+    // the first check of large packings, at the peak of a run's memory).
     let mut start = vec![0usize; n + 1];
-    for (i, j, _) in &edges {
+    for e in edges {
+        let (i, j, _) = ends(e);
         start[i + 1] += 1;
         start[j + 1] += 1;
     }
@@ -31,14 +32,15 @@ where
         start[k + 1] += start[k];
     }
     let mut fill = start.clone();
-    // 32-bit indices: this runs on the first check of large packings (peak memory).
-    let mut adj = vec![(0u32, 0u32, 1.0f64); start[n]];
-    for (e, &(i, j, _)) in edges.iter().enumerate() {
-        adj[fill[i]] = (j as u32, e as u32, 1.0);
-        fill[i] += 1;
-        adj[fill[j]] = (i as u32, e as u32, -1.0);
-        fill[j] += 1;
+    let mut adj = vec![0u32; start[n]];
+    for (k, e) in edges.iter().enumerate() {
+        let (i, j, _) = ends(e);
+        for g in [i, j] {
+            adj[fill[g]] = k as u32;
+            fill[g] += 1;
+        }
     }
+    drop(fill);
     // Breadth-first walk: each grain gets an unwrapped position (`offset`, d values a grain)
     // relative to the first grain of its cluster; an edge closing a loop whose branches sum to
     // a non-zero lattice vector wraps the cell.
@@ -53,9 +55,10 @@ where
         placed[first] = true;
         queue.push_back(first);
         while let Some(i) = queue.pop_front() {
-            for &(j, e, sign) in &adj[start[i]..start[i + 1]] {
-                let (j, e) = (j as usize, e as usize);
-                let branch = &*edges[e].2;
+            for &e in &adj[start[i]..start[i + 1]] {
+                let (from, to, branch) = ends(&edges[e as usize]);
+                // The branch points from `from` to `to`: walked from its other end, reversed.
+                let (j, sign) = if from == i { (to, 1.0) } else { (from, -1.0) };
                 for a in 0..d {
                     let reached = offset[i * d + a] + sign * branch[a];
                     if !placed[j] {
@@ -85,11 +88,7 @@ mod tests {
     }
 
     fn axes(lengths: &[f64], n: usize, edges: &[(usize, usize, Vec<f64>)]) -> Vec<bool> {
-        wrapped_axes(
-            lengths,
-            n,
-            edges.iter().map(|(i, j, b)| (*i, *j, b.as_slice())),
-        )
+        wrapped_axes(lengths, n, edges, |(i, j, b)| (*i, *j, b.clone()))
     }
 
     #[test]

@@ -45,6 +45,12 @@ pub struct Snapshot {
     pub contacts: Vec<Contact>,
 }
 
+/// A small vector of a snapshot (a position, a velocity, a branch vector, a force, a moment):
+/// d ≤ 3 components stored inline (32 B instead of a 24-byte header and a separate heap
+/// block for each; on large packings that halves the size of a snapshot in memory). Serialized
+/// as a JSON array, as `Vec<f64>` was.
+pub type Vector = smallvec::SmallVec<[f64; 3]>;
+
 /// Orthorhombic periodic cell `[0, L_1) × … × [0, L_d)`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -62,11 +68,11 @@ pub struct Cell {
 pub struct Particles {
     pub radius: Vec<f64>,
     pub mass: Vec<f64>,
-    pub position: Vec<Vec<f64>>,
-    pub velocity: Vec<Vec<f64>>,
+    pub position: Vec<Vector>,
+    pub velocity: Vec<Vector>,
     /// One value per grain in 2D, three in 3D; empty when the law has no moments.
     #[serde(default)]
-    pub angular_velocity: Vec<Vec<f64>>,
+    pub angular_velocity: Vec<Vector>,
 }
 
 /// One interacting pair (in contact, or within the attraction range).
@@ -76,17 +82,17 @@ pub struct Contact {
     pub i: usize,
     pub j: usize,
     /// r_j − r_i, nearest periodic image.
-    pub branch: Vec<f64>,
+    pub branch: Vector,
     /// Total normal force N (repulsive positive): elastic + viscous − adhesion.
     pub normal: f64,
     /// Elastic repulsive part N_e (the part the Coulomb and rolling thresholds use).
     pub normal_elastic: f64,
     /// Tangential force exerted by i on j.
     #[serde(default)]
-    pub tangential: Vec<f64>,
+    pub tangential: Vector,
     /// Rolling moment exerted by i on j (empty without rolling resistance).
     #[serde(default)]
-    pub rolling: Vec<f64>,
+    pub rolling: Vector,
     /// Surface gap h (negative: overlap).
     pub gap: f64,
 }
@@ -369,6 +375,7 @@ pub fn write_atomic_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use smallvec::smallvec;
 
     /// Two touching disks in a 4 × 4 cell.
     fn valid() -> Snapshot {
@@ -393,18 +400,18 @@ mod tests {
             particles: Particles {
                 radius: vec![0.5, 0.5],
                 mass: vec![1.0, 1.0],
-                position: vec![vec![1.0, 1.0], vec![2.0, 1.0]],
-                velocity: vec![vec![0.0; 2]; 2],
-                angular_velocity: vec![vec![0.0]; 2],
+                position: vec![smallvec![1.0, 1.0], smallvec![2.0, 1.0]],
+                velocity: vec![smallvec![0.0; 2]; 2],
+                angular_velocity: vec![smallvec![0.0]; 2],
             },
             contacts: vec![Contact {
                 i: 0,
                 j: 1,
-                branch: vec![1.0, 0.0],
+                branch: smallvec![1.0, 0.0],
                 normal: 1e-3,
                 normal_elastic: 1e-3,
-                tangential: vec![0.0, 0.0],
-                rolling: vec![],
+                tangential: smallvec![0.0, 0.0],
+                rolling: smallvec![],
                 gap: 0.0,
             }],
         }
@@ -443,8 +450,8 @@ mod tests {
                 for k in 0..4 {
                     p.radius.push(0.5);
                     p.mass.push(1.0);
-                    p.position.push(vec![0.1 * k as f64, 1.0]);
-                    p.velocity.push(vec![0.0; 2]);
+                    p.position.push(smallvec![0.1 * k as f64, 1.0]);
+                    p.velocity.push(smallvec![0.0; 2]);
                 }
             },
             "Φ =",

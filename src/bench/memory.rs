@@ -64,7 +64,7 @@ fn start_snapshot(s: &[<D3 as Dim>::V], l: <D3 as Dim>::V) -> Snapshot {
                 .iter()
                 .map(|x| (0..3).map(|a| x[a] * l[a]).collect())
                 .collect(),
-            velocity: vec![vec![0.0; 3]; n],
+            velocity: vec![snapshot::Vector::from_elem(0.0, 3); n],
             angular_velocity: Vec::new(),
         },
         contacts: Vec::new(),

@@ -14,7 +14,7 @@
 //! Real spherical harmonics are used: they are a unitary recombination of the complex
 //! `Y_lm` at each l, so every sum `Σ_m q_lm(i) q*_lm(j)` is unchanged.
 
-use super::neighbors::{for_each_pair, points, valid_cell, Point};
+use super::neighbors::{for_each_pair, points, valid_cell, CellGrid, Point};
 use serde::Serialize;
 use std::f64::consts::PI;
 
@@ -84,6 +84,12 @@ fn legendre_assoc(l: usize, m: usize, x: f64) -> f64 {
 /// (m < 0), with `N_lm = [(2l+1)/(4π) (l−m)!/(l+m)!]^{1/2}`. Orthonormal on the sphere.
 pub fn real_spherical_harmonics(l: usize, n: &[f64; 3]) -> Vec<f64> {
     let mut out = vec![0.0; 2 * l + 1];
+    harmonics_into(l, n, &mut out);
+    out
+}
+
+/// [`real_spherical_harmonics`] into `out` (length 2l + 1), without allocating.
+fn harmonics_into(l: usize, n: &[f64; 3], out: &mut [f64]) {
     let z = n[2].clamp(-1.0, 1.0);
     let phi = n[1].atan2(n[0]);
     for m in 0..=l {
@@ -99,7 +105,14 @@ pub fn real_spherical_harmonics(l: usize, n: &[f64; 3]) -> Vec<f64> {
             out[l - m] = c * (m as f64 * phi).sin();
         }
     }
-    out
+}
+
+/// Y_4m and Y_6m at the unit vector `u`.
+fn y46(u: &[f64; 3]) -> ([f64; 9], [f64; 13]) {
+    let (mut y4, mut y6) = ([0.0; 9], [0.0; 13]);
+    harmonics_into(4, u, &mut y4);
+    harmonics_into(6, u, &mut y6);
+    (y4, y6)
 }
 
 /// `[4π/(2l+1) Σ_m q_m²]^{1/2}` of AR07 (31).
@@ -122,13 +135,15 @@ pub fn q_l(l: usize, directions: &[[f64; 3]]) -> Option<f64> {
     Some(q_norm(l, &q))
 }
 
-/// Per-grain sums of Y_4m and Y_6m over bonds, and the bond list.
+/// Per-grain sums of Y_4m and Y_6m over bonds. The bonds themselves are not kept: a metric
+/// that needs them walks them again with [`for_each_bond`] (a pass over the cell grid costs
+/// less than the harmonics, and a list of ~6 bonds a grain would be the largest array here).
 struct Bonds {
-    pairs: Vec<(usize, usize)>,
-    count: Vec<usize>,
+    count: Vec<u32>,
     q4: Vec<[f64; 9]>,
     q6: Vec<[f64; 13]>,
-    /// Sums over all bonds (global order).
+    /// Number of bonds, and sums over all bonds (global order).
+    total: usize,
     g4: [f64; 9],
     g6: [f64; 13],
 }
@@ -141,26 +156,36 @@ impl Bonds {
     }
 }
 
-fn bonds(lengths: &[f64], position: &[Vec<f64>], cutoff: f64) -> Bonds {
-    let n = position.len();
-    let pts = points(3, position);
-    let mut b = Bonds {
-        pairs: Vec::new(),
-        count: vec![0; n],
-        q4: vec![[0.0; 9]; n],
-        q6: vec![[0.0; 13]; n],
-        g4: [0.0; 9],
-        g6: [0.0; 13],
-    };
-    for_each_pair(lengths, &pts, cutoff, |i, j, r: &Point, r2| {
+/// Calls `f(i, j, u)` for every bond `i < j` shorter than `cutoff`, `u` its unit vector; the
+/// same bonds, in the same order, at every call with the same points.
+fn for_each_bond(
+    lengths: &[f64],
+    pts: &[Point],
+    cutoff: f64,
+    mut f: impl FnMut(usize, usize, [f64; 3]),
+) {
+    for_each_pair(lengths, pts, cutoff, |i, j, r: &Point, r2| {
         let len = r2.sqrt();
         if len.is_nan() || len <= 0.0 {
             return;
         }
-        let u = [r[0] / len, r[1] / len, r[2] / len];
+        f(i, j, [r[0] / len, r[1] / len, r[2] / len]);
+    });
+}
+
+fn bonds(lengths: &[f64], pts: &[Point], cutoff: f64) -> Bonds {
+    let n = pts.len();
+    let mut b = Bonds {
+        count: vec![0; n],
+        q4: vec![[0.0; 9]; n],
+        q6: vec![[0.0; 13]; n],
+        total: 0,
+        g4: [0.0; 9],
+        g6: [0.0; 13],
+    };
+    for_each_bond(lengths, pts, cutoff, |i, j, u| {
         // Even l: Y_lm(−u) = Y_lm(u), both ends get the same harmonics.
-        let y4 = real_spherical_harmonics(4, &u);
-        let y6 = real_spherical_harmonics(6, &u);
+        let (y4, y6) = y46(&u);
         for g in [i, j] {
             b.count[g] += 1;
             b.q4[g].iter_mut().zip(&y4).for_each(|(a, y)| *a += y);
@@ -168,9 +193,34 @@ fn bonds(lengths: &[f64], position: &[Vec<f64>], cutoff: f64) -> Bonds {
         }
         b.g4.iter_mut().zip(&y4).for_each(|(a, y)| *a += y);
         b.g6.iter_mut().zip(&y6).for_each(|(a, y)| *a += y);
-        b.pairs.push((i, j));
+        b.total += 1;
     });
     b
+}
+
+/// (Q4^loc(g), Q6^loc(g)) of AR07 (31) for every grain, `None` without bonds, grain by grain
+/// from its neighbours in the cell grid: only the two numbers a grain are kept (the sums of
+/// [`Bonds`] are 176 B a grain), at twice the harmonics (each bond is seen from both ends).
+fn local_orders(lengths: &[f64], pts: &[Point], cutoff: f64) -> Vec<Option<(f64, f64)>> {
+    let Some(grid) = CellGrid::new(lengths, pts, cutoff) else {
+        return vec![None; pts.len()];
+    };
+    pts.iter()
+        .map(|p| {
+            let (mut q4, mut q6, mut k) = ([0.0; 9], [0.0; 13], 0usize);
+            grid.query(p, |_, r, r2| {
+                let len = r2.sqrt();
+                if len.is_nan() || len <= 0.0 {
+                    return;
+                }
+                let (y4, y6) = y46(&[r[0] / len, r[1] / len, r[2] / len]);
+                q4.iter_mut().zip(&y4).for_each(|(a, y)| *a += y);
+                q6.iter_mut().zip(&y6).for_each(|(a, y)| *a += y);
+                k += 1;
+            });
+            (k > 0).then(|| (q_norm(4, &q4) / k as f64, q_norm(6, &q6) / k as f64))
+        })
+        .collect()
 }
 
 /// Per-grain local order Q_l^loc(i) (AR07 (31)) for l = 4 or 6 (AR07 App. D plots the pairs
@@ -178,7 +228,7 @@ fn bonds(lengths: &[f64], position: &[Vec<f64>], cutoff: f64) -> Bonds {
 /// another l, a bad cell or a.
 pub fn local_order(
     lengths: &[f64],
-    position: &[Vec<f64>],
+    position: &[impl std::ops::Deref<Target = [f64]>],
     a: f64,
     cutoff_over_a: f64,
     l: usize,
@@ -186,7 +236,7 @@ pub fn local_order(
     if lengths.len() != 3 || !valid_cell(lengths) || !(a > 0.0 && a.is_finite()) {
         return None;
     }
-    let b = bonds(lengths, position, cutoff_over_a * a);
+    let b = bonds(lengths, &points(3, position), cutoff_over_a * a);
     let per = |g: usize| b.local(g).map(|(q4, q6)| if l == 4 { q4 } else { q6 });
     matches!(l, 4 | 6).then(|| (0..position.len()).map(per).collect())
 }
@@ -249,7 +299,7 @@ pub struct LocalEnvironments {
 /// diameter). Grains without bonds are in no class. `None` unless 3D, or for a bad cell or a.
 pub fn local_environments(
     lengths: &[f64],
-    position: &[Vec<f64>],
+    position: &[impl std::ops::Deref<Target = [f64]>],
     a: f64,
 ) -> Option<Vec<LocalEnvironments>> {
     if lengths.len() != 3 || !valid_cell(lengths) || !(a > 0.0 && a.is_finite()) {
@@ -260,11 +310,12 @@ pub fn local_environments(
         (q.0 - mode.0).abs() <= ENVIRONMENT_HALF_WIDTH
             && (q.1 - mode.1).abs() <= ENVIRONMENT_HALF_WIDTH
     };
+    let pts = points(3, position);
     let per_cutoff = (0..4).map(|k| {
         let cutoff = ASTE_MODES[0].1[k].0;
-        let b = bonds(lengths, position, cutoff * a);
-        let q: Vec<(f64, f64)> = (0..position.len()).filter_map(|g| b.local(g)).collect();
-        let fraction = |mode: (f64, f64)| q.iter().filter(|&&x| within(x, mode)).count() as f64 / n;
+        let q = local_orders(lengths, &pts, cutoff * a);
+        let fraction =
+            |mode: (f64, f64)| q.iter().flatten().filter(|&&x| within(x, mode)).count() as f64 / n;
         LocalEnvironments {
             cutoff,
             fcc: fraction(FCC_LIKE),
@@ -278,11 +329,12 @@ pub fn local_environments(
     Some(per_cutoff.collect())
 }
 
-/// Crystalline clusters: connected components of the crystalline grains through `pairs`.
+/// Crystalline clusters: connected components of the crystalline grains through the bonds
+/// that `pairs` walks (it calls its argument once per bond `(i, j)`).
 /// Returns (number of clusters, mass-average size Σ n_c²/Σ n_c, largest size).
 pub fn crystalline_clusters(
     crystalline: &[bool],
-    pairs: &[(usize, usize)],
+    pairs: impl FnOnce(&mut dyn FnMut(usize, usize)),
 ) -> (usize, Option<f64>, usize) {
     let n = crystalline.len();
     let mut parent: Vec<usize> = (0..n).collect();
@@ -293,14 +345,14 @@ pub fn crystalline_clusters(
         }
         x
     }
-    for &(i, j) in pairs {
+    pairs(&mut |i, j| {
         if i < n && j < n && crystalline[i] && crystalline[j] {
             let (ri, rj) = (find(&mut parent, i), find(&mut parent, j));
             if ri != rj {
                 parent[ri.max(rj)] = ri.min(rj);
             }
         }
-    }
+    });
     let mut size = vec![0usize; n];
     for g in (0..n).filter(|&g| crystalline[g]) {
         let r = find(&mut parent, g);
@@ -318,7 +370,7 @@ pub fn crystalline_clusters(
 /// there are no bonds.
 pub fn bond_order(
     lengths: &[f64],
-    position: &[Vec<f64>],
+    position: &[impl std::ops::Deref<Target = [f64]>],
     a: f64,
     cutoff_over_a: f64,
 ) -> Option<BondOrder> {
@@ -329,8 +381,10 @@ pub fn bond_order(
         return None;
     }
     let n = position.len();
-    let b = bonds(lengths, position, cutoff_over_a * a);
-    let nb = b.pairs.len();
+    let pts = points(3, position);
+    let cutoff = cutoff_over_a * a;
+    let b = bonds(lengths, &pts, cutoff);
+    let nb = b.total;
     let per_grain = |x: usize| {
         if n > 0 {
             2.0 * x as f64 / n as f64
@@ -364,9 +418,9 @@ pub fn bond_order(
                 }
             })
             .collect();
-    let mut cr_of = vec![0usize; n];
+    let mut cr_of = vec![0u32; n];
     let mut crystalline_bonds = 0;
-    for &(i, j) in &b.pairs {
+    for_each_bond(lengths, &pts, cutoff, |i, j, _| {
         if !(norm6[i].is_nan() || norm6[j].is_nan()) {
             let (qi, qj) = (&b.q6[i], &b.q6[j]);
             let s: f64 = qi
@@ -380,10 +434,15 @@ pub fn bond_order(
                 cr_of[j] += 1;
             }
         }
-    }
-    let crystalline: Vec<bool> = cr_of.iter().map(|&k| k >= CRYSTALLINE_BONDS).collect();
+    });
+    let crystalline: Vec<bool> = cr_of
+        .iter()
+        .map(|&k| k as usize >= CRYSTALLINE_BONDS)
+        .collect();
     let cr_set: Vec<usize> = (0..n).filter(|&g| crystalline[g]).collect();
-    let (clusters, n_cr, largest_cluster) = crystalline_clusters(&crystalline, &b.pairs);
+    let (clusters, n_cr, largest_cluster) = crystalline_clusters(&crystalline, |each| {
+        for_each_bond(lengths, &pts, cutoff, |i, j, _| each(i, j))
+    });
 
     Some(BondOrder {
         cutoff: cutoff_over_a,
@@ -704,9 +763,15 @@ mod tests {
     #[test]
     fn cluster_mass_average() {
         let cr = [true, true, true, false, true];
-        let pairs = [(0, 1), (2, 1), (2, 3), (3, 4)];
-        assert_eq!(crystalline_clusters(&cr, &pairs), (2, Some(2.5), 3));
-        assert_eq!(crystalline_clusters(&[false; 3], &pairs[..1]), (0, None, 0));
+        const PAIRS: [(usize, usize); 4] = [(0, 1), (2, 1), (2, 3), (3, 4)];
+        let walk = |pairs: &'static [(usize, usize)]| {
+            move |each: &mut dyn FnMut(usize, usize)| pairs.iter().for_each(|&(i, j)| each(i, j))
+        };
+        assert_eq!(crystalline_clusters(&cr, walk(&PAIRS)), (2, Some(2.5), 3));
+        assert_eq!(
+            crystalline_clusters(&[false; 3], walk(&PAIRS[..1])),
+            (0, None, 0)
+        );
     }
 
     /// 2D, no bonds, degenerate cells.

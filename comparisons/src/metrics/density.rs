@@ -34,7 +34,7 @@ pub struct DensityCorrelations {
 /// `None` unless the cell is 2D (`a`: the length unit, [`super::structure::unit_length`]).
 pub fn density_correlations(
     lengths: &[f64],
-    position: &[Vec<f64>],
+    position: &[impl std::ops::Deref<Target = [f64]>],
     radius: &[f64],
     a: f64,
     phi: f64,

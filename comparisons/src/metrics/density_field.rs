@@ -32,7 +32,7 @@ impl Mesh {
 /// `None` for a degenerate cell.
 pub fn rasterize(
     lengths: &[f64],
-    position: &[Vec<f64>],
+    position: &[impl std::ops::Deref<Target = [f64]>],
     radius: &[f64],
     spacing: f64,
 ) -> Option<Mesh> {

@@ -143,7 +143,7 @@ pub fn random_direction(d: usize, seed: u64, g: usize) -> [f64; 3] {
 /// or no fixed grain.
 pub fn relax_rattlers(
     lengths: &[f64],
-    position: &[Vec<f64>],
+    position: &[impl std::ops::Deref<Target = [f64]>],
     radius: &[f64],
     is_rattler: &[bool],
     direction: &[[f64; 3]],
@@ -353,7 +353,7 @@ pub fn geometric_contacts(
 /// (nothing to fix the rattlers onto) or for a bad cell.
 pub fn fix_rattlers(
     lengths: &[f64],
-    position: &[Vec<f64>],
+    position: &[impl std::ops::Deref<Target = [f64]>],
     radius: &[f64],
     is_rattler: &[bool],
     counted: &[(usize, usize)],

@@ -1,6 +1,6 @@
 //! Hand-built snapshots for unit tests.
 
-use grainbench_engine::snapshot::{Cell, Contact, Particles, Snapshot, FORMAT, VERSION};
+use grainbench_engine::snapshot::{Cell, Contact, Particles, Snapshot, Vector, FORMAT, VERSION};
 
 /// One interaction to place in a fixture: grains, total normal force, tangential force.
 #[derive(Clone, Debug)]
@@ -76,11 +76,11 @@ pub fn unchecked_snapshot(
                 i: b.i,
                 j: b.j,
                 gap: len - radius[b.i] - radius[b.j],
-                branch: r,
+                branch: Vector::from_slice(&r),
                 normal: b.normal,
                 normal_elastic: b.normal.max(0.0),
-                tangential: b.tangential.clone(),
-                rolling: Vec::new(),
+                tangential: Vector::from_slice(&b.tangential),
+                rolling: Vector::new(),
             }
         })
         .collect();
@@ -104,8 +104,8 @@ pub fn unchecked_snapshot(
         },
         particles: Particles {
             mass: vec![1.0; n],
-            velocity: vec![vec![0.0; d]; n],
-            position,
+            velocity: vec![Vector::from_elem(0.0, d); n],
+            position: position.iter().map(|p| Vector::from_slice(p)).collect(),
             radius,
             angular_velocity: Vec::new(),
         },

@@ -235,16 +235,17 @@ pub fn force_stats(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use grainbench_engine::snapshot::Vector;
 
     fn contact(i: usize, j: usize, branch: &[f64], normal: f64, t: &[f64]) -> Contact {
         Contact {
             i,
             j,
-            branch: branch.to_vec(),
+            branch: Vector::from_slice(branch),
             normal,
             normal_elastic: normal.max(0.0),
-            tangential: t.to_vec(),
-            rolling: Vec::new(),
+            tangential: Vector::from_slice(t),
+            rolling: Vector::new(),
             gap: 0.0,
         }
     }

@@ -215,9 +215,19 @@ pub fn measure(frames: &[Snapshot]) -> Option<Impact> {
         restitution_tangential: e_t,
         incidence_angle: t_in.atan2(before.v_n).to_degrees(),
         rebound_angle: norm(&after.v_t).atan2(-after.v_n).to_degrees(),
-        spin_before: frames[0].particles.angular_velocity.clone(),
-        spin_after: frames[frames.len() - 1].particles.angular_velocity.clone(),
+        spin_before: spins(&frames[0]),
+        spin_after: spins(&frames[frames.len() - 1]),
     })
+}
+
+/// Angular velocity of each grain of a frame.
+fn spins(frame: &Snapshot) -> Vec<Vec<f64>> {
+    frame
+        .particles
+        .angular_velocity
+        .iter()
+        .map(|w| w.to_vec())
+        .collect()
 }
 
 /// What `impact.json` holds.

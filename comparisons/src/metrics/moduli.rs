@@ -301,7 +301,7 @@ mod tests {
         let snap0 = snapshot(
             snap.cell.lengths.clone(),
             snap.particles.radius.clone(),
-            snap.particles.position.clone(),
+            snap.particles.position.iter().map(|p| p.to_vec()).collect(),
             &b,
             false,
             Some(0.0),

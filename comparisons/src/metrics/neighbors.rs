@@ -6,7 +6,7 @@
 pub(crate) type Point = [f64; 3];
 
 /// Grain centres of a snapshot as padded points (missing components read as 0).
-pub(crate) fn points(d: usize, position: &[Vec<f64>]) -> Vec<Point> {
+pub(crate) fn points(d: usize, position: &[impl std::ops::Deref<Target = [f64]>]) -> Vec<Point> {
     position
         .iter()
         .map(|p| {

@@ -42,7 +42,7 @@ pub fn unit_length(radius: &[f64]) -> Option<f64> {
 /// `None` for fewer than 2 grains, a bad cell, `a` or bin width.
 pub fn pair_correlation(
     lengths: &[f64],
-    position: &[Vec<f64>],
+    position: &[impl std::ops::Deref<Target = [f64]>],
     a: f64,
     bin_width: f64,
     r_max: f64,
@@ -119,7 +119,7 @@ pub fn default_gap_grid(h_max: f64) -> Vec<f64> {
 /// the mean is over the included grains. `None` if no grain is included, or a bad cell or a.
 pub fn gap_coordination(
     lengths: &[f64],
-    position: &[Vec<f64>],
+    position: &[impl std::ops::Deref<Target = [f64]>],
     radius: &[f64],
     include: Option<&[bool]>,
     a: f64,

@@ -4,6 +4,7 @@
 use super::fixtures::{bond, lattice, snapshot, Bond, Lcg};
 use super::math::{dot, norm};
 use super::*;
+use grainbench_engine::snapshot::Vector;
 use std::f64::consts::PI;
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
@@ -750,13 +751,13 @@ fn odd_snapshots_do_not_panic() {
 
     let mut bad = gas.clone();
     bad.cell.lengths = vec![6.0, 0.0, -1.0];
-    bad.particles.position[3] = vec![f64::NAN, 0.0, f64::INFINITY];
+    bad.particles.position[3] = Vector::from_slice(&[f64::NAN, 0.0, f64::INFINITY]);
     let a = analyze(&bad, &Options::default());
     assert!(a.structure.pair_correlation.is_none() && a.bond_order.is_none());
     let _ = crate::report::to_markdown(&a);
 
     let mut nan = gas;
-    nan.particles.position[3] = vec![f64::NAN, 0.0, f64::INFINITY];
+    nan.particles.position[3] = Vector::from_slice(&[f64::NAN, 0.0, f64::INFINITY]);
     nan.particles.radius[5] = f64::NAN;
     let a = analyze(&nan, &Options::default());
     let _ = (crate::report::to_markdown(&a), a.metric_values());

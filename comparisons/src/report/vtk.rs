@@ -247,6 +247,7 @@ fn contacts_vtu(snap: &Snapshot) -> String {
 mod tests {
     use super::*;
     use crate::metrics::fixtures::{bond, snapshot};
+    use grainbench_engine::snapshot::Vector;
 
     /// Two disks of diameter 1 overlapping by 0.01 across the x boundary of a 4 × 2 cell.
     fn two_disks() -> Snapshot {
@@ -260,7 +261,8 @@ mod tests {
             false,
             Some(0.5),
         );
-        s.particles.angular_velocity = vec![vec![0.5], vec![-0.5]];
+        s.particles.angular_velocity =
+            vec![Vector::from_slice(&[0.5]), Vector::from_slice(&[-0.5])];
         s
     }
 

@@ -5,7 +5,7 @@ use super::numerics::StageNumerics;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
 use crate::scene::Mu;
-use crate::snapshot::{self, Snapshot};
+use crate::snapshot::{self, Snapshot, Vector};
 use crate::system::System;
 
 /// The snapshot of the current state.
@@ -35,18 +35,18 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
         contacts.push(snapshot::Contact {
             i: c.i,
             j: c.j,
-            branch: c.branch.to_vec(),
+            branch: c.branch.components(),
             normal: c.normal,
             normal_elastic: c.normal_elastic,
             tangential: if L::MOMENTS {
-                c.tangential.to_vec()
+                c.tangential.components()
             } else {
-                Vec::new()
+                Vector::new()
             },
             rolling: if L::ROLLING {
-                c.rolling.to_vec()
+                c.rolling.components()
             } else {
-                Vec::new()
+                Vector::new()
             },
             gap: c.gap,
         })
@@ -76,10 +76,10 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
         particles: snapshot::Particles {
             radius: sys.radius.clone(),
             mass: sys.mass.clone(),
-            position: (0..n).map(|i| sys.position(i).to_vec()).collect(),
-            velocity: sys.u.iter().map(|v| v.to_vec()).collect(),
+            position: (0..n).map(|i| sys.position(i).components()).collect(),
+            velocity: sys.u.iter().map(|v| v.components()).collect(),
             angular_velocity: if L::MOMENTS {
-                sys.w.iter().map(|w| w.to_vec()).collect()
+                sys.w.iter().map(|w| w.components()).collect()
             } else {
                 Vec::new()
             },

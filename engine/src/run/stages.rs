@@ -17,6 +17,7 @@ use crate::cell::Control;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
 use crate::init::maxwell_velocities;
+use crate::neighbor::branch;
 use crate::network;
 use crate::protocols::event_driven::HardSpheres;
 use crate::scene::{Scene, Step};
@@ -378,13 +379,13 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             if let Some(cb) = opts.progress.as_mut() {
                 let stressed = matches!(sys.cell.control, Control::Stress { .. });
                 let wrapped_axes = (first_check && stressed).then(|| {
+                    // The pairs only: each branch is computed again when the walk reaches it.
                     let mut edges = Vec::with_capacity(inter.len());
-                    sys.for_each_interaction(|c| edges.push((c.i as u32, c.j as u32, c.branch)));
-                    network::wrapped_axes(
-                        &sys.cell.l.to_vec(),
-                        sys.len(),
-                        edges.iter().map(|(i, j, b)| (*i as usize, *j as usize, b)),
-                    )
+                    sys.for_each_interaction(|c| edges.push((c.i as u32, c.j as u32)));
+                    network::wrapped_axes(&sys.cell.l.to_vec(), sys.len(), &edges, |&(i, j)| {
+                        let (i, j) = (i as usize, j as usize);
+                        (i, j, branch::<D>(&sys.s[i], &sys.s[j], &sys.cell.l))
+                    })
                 });
                 first_check = false;
                 cb(&Progress {

@@ -18,7 +18,7 @@ pub mod trace;
 pub mod yade;
 
 use super::code::Code;
-use grainbench_engine::snapshot::{self, Snapshot};
+use grainbench_engine::snapshot::{self, Snapshot, Vector};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -166,7 +166,7 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
     } else {
         vec![0.0; d]
     };
-    let position: Vec<Vec<f64>> = raw
+    let position: Vec<Vector> = raw
         .position
         .iter()
         .map(|p| {
@@ -212,15 +212,15 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
             i: c.i,
             j: c.j,
             gap: dist - raw.radius[c.i] - raw.radius[c.j],
-            branch,
+            branch: Vector::from_slice(&branch),
             normal: c.normal,
             normal_elastic: c.normal_elastic.unwrap_or(c.normal),
             tangential: if tangential.is_empty() {
-                Vec::new()
+                Vector::new()
             } else {
-                tangential[..d].to_vec()
+                Vector::from_slice(&tangential[..d])
             },
-            rolling: c.rolling.clone(),
+            rolling: Vector::from_slice(&c.rolling),
         });
     }
     let mut kinetic = vec![vec![0.0; d]; d];
@@ -232,9 +232,12 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
         }
     }
     let velocity = if raw.velocity.len() == n {
-        raw.velocity.iter().map(|v| v[..d].to_vec()).collect()
+        raw.velocity
+            .iter()
+            .map(|v| Vector::from_slice(&v[..d]))
+            .collect()
     } else {
-        vec![vec![0.0; d]; n]
+        vec![Vector::from_elem(0.0, d); n]
     };
     let snap = Snapshot {
         format: snapshot::FORMAT.into(),
@@ -263,7 +266,11 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
             mass: raw.mass,
             position,
             velocity,
-            angular_velocity: raw.angular_velocity,
+            angular_velocity: raw
+                .angular_velocity
+                .iter()
+                .map(|w| Vector::from_slice(w))
+                .collect(),
         },
         contacts,
     };
@@ -606,7 +613,13 @@ pub fn atoms_of(
 }
 
 /// r_j − r_i by the nearest periodic image (first `d` axes).
-pub fn branch(position: &[Vec<f64>], lengths: &[f64], i: usize, j: usize, d: usize) -> Vec<f64> {
+pub fn branch(
+    position: &[impl std::ops::Deref<Target = [f64]>],
+    lengths: &[f64],
+    i: usize,
+    j: usize,
+    d: usize,
+) -> Vec<f64> {
     (0..d)
         .map(|a| {
             let x = position[j][a] - position[i][a];

@@ -297,7 +297,10 @@ mod tests {
             "{c:?}"
         );
         assert!((c.tangential[1] - 0.3).abs() < 1e-12, "{c:?}");
-        assert_eq!(frames[1].particles.angular_velocity[1], vec![0.0, 0.0, 1.0]);
+        assert_eq!(
+            frames[1].particles.angular_velocity[1].as_slice(),
+            [0.0, 0.0, 1.0]
+        );
         assert_eq!(frames[1].time, 0.1);
     }
 
