@@ -2,12 +2,12 @@
 //! (checkpointed, resumable), measures every metric with the same code as `analyze`, and
 //! writes the table against the published values (golden/paper-values.toml) and the plots.
 
-use crate::common::seed_list;
+use crate::common::{analysis_with_moduli, seed_list};
 use crate::consolidation;
 use crate::run::{run, stage_file, RunFlags, CHECKPOINT, STAGES};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::metrics::fractal_fit::FractalFit;
-use grainbench_comparisons::metrics::{analyze, density, Analysis};
+use grainbench_comparisons::metrics::{analyze, density, Analysis, MODULI_METRICS};
 use grainbench_comparisons::report::reproduction::{self, SeedStats};
 use grainbench_comparisons::report::{paper, plots};
 use grainbench_engine::{library, snapshot, Snapshot};
@@ -143,9 +143,22 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             snapshot: o.snapshot,
         });
     }
+    // The elastic moduli and rigidity counts (seconds a seed) only where the paper publishes
+    // one of them (AR07 Z's H/N_f).
+    let with_moduli = paper::paper_values(&state_key).is_some_and(|p| {
+        p.values
+            .keys()
+            .any(|k| MODULI_METRICS.contains(&k.as_str()))
+    });
     let analyses: Vec<Analysis> = runs
         .iter()
-        .map(|r| analyze(&r.snapshot, &Default::default()))
+        .map(|r| {
+            if with_moduli {
+                analysis_with_moduli(&r.snapshot, &base)
+            } else {
+                analyze(&r.snapshot, &Default::default())
+            }
+        })
         .collect();
     let mut values: Vec<Vec<(String, f64)>> = analyses.iter().map(|a| a.metric_values()).collect();
     // GRC08 §III: the consolidation curve of each seed and its fit by GRC08 (9).

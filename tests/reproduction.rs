@@ -334,3 +334,27 @@ fn golden_records_were_made_with_the_scenes_as_they_are() {
         stale.join(", ")
     );
 }
+
+/// `reproduce` measures the elastic moduli and the rigidity count where the paper publishes
+/// one of them: AR07 Z's H/N_f (its reduced scene cut short; the count works on any network).
+#[test]
+fn reproduce_counts_rigidity_where_the_paper_publishes_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    Command::cargo_bin("grainbench")
+        .unwrap()
+        .args(["reproduce", "ar07", "--state", "Z", "--ci", "--seeds", "1"])
+        .args(["-j", "1", "--max-time", "30", "-o"])
+        .arg(tmp.path())
+        .assert()
+        .success();
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("report.json")).unwrap()).unwrap();
+    let row = report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["metric"] == "H_over_Nf")
+        .expect("a H_over_Nf row");
+    let h = row["ours"]["mean"].as_f64().expect("H/N_f measured");
+    assert!((0.0..1.0).contains(&h), "H/N_f = {h}");
+}

@@ -145,6 +145,19 @@ impl Default for Options {
 /// x0 ≤ 0.21.
 pub const MAX_FIXED_RATTLER_FRACTION: f64 = 0.5;
 
+/// The keys of [`Analysis::metric_values`] that only [`Options::moduli`] measures.
+pub const MODULI_METRICS: &[&str] = &[
+    "B",
+    "G",
+    "B_V",
+    "G_V",
+    "B_R",
+    "E95",
+    "mechanisms",
+    "H",
+    "H_over_Nf",
+];
+
 /// Everything [`analyze`] measures on one snapshot.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Analysis {

@@ -45,14 +45,15 @@ pub struct Moduli {
     pub interactions: usize,
     pub distant: usize,
     pub dofs: usize,
-    /// Mechanisms and force indeterminacy with the cell fixed (GRC07 App. A); `None` above
-    /// [`super::stiffness::MAX_RIGIDITY_DOFS`] or when not asked for.
+    /// Mechanisms and force indeterminacy with the cell fixed (GRC07 App. A); `None` when not
+    /// asked for.
     pub rigidity: Option<Rigidity>,
 }
 
 /// The moduli of `snap` carried by the interactions `contacts` (the backbone) under `law`,
-/// with the network's mechanisms and force indeterminacy when `with_rigidity` (a dense rank:
-/// seconds at a few thousand degrees of freedom, where the moduli take a fraction of one).
+/// with the network's mechanisms and force indeterminacy when `with_rigidity` (a dense rank up
+/// to [`super::stiffness::MAX_RIGIDITY_DOFS`], seconds at a few thousand degrees of freedom
+/// where the moduli take a fraction of one; a sparse inertia count above).
 ///
 /// # Errors
 /// No interaction; a degenerate contact; a stiffness matrix that is not positive definite
@@ -220,7 +221,7 @@ fn reuss_bulk(snap: &Snapshot, contacts: &[&Contact], net: &Network, volume: f64
 #[cfg(test)]
 mod tests {
     use super::super::fixtures::{bond, lattice, snapshot, Bond};
-    use super::super::stiffness::{NormalStiffness, Rigidity};
+    use super::super::stiffness::{rigidity_by, NormalStiffness, RankMethod, Rigidity};
     use super::*;
 
     fn linear(kn: f64, kt: Option<f64>, kr: Option<f64>) -> ContactStiffness {
@@ -389,10 +390,64 @@ mod tests {
         )
     }
 
+    /// The rigidity counts of every contact of `snap`, dense and sparse (which must agree).
     fn count(snap: &Snapshot, law: &ContactStiffness) -> Rigidity {
         let all: Vec<&Contact> = snap.contacts.iter().collect();
         let net = Network::build(snap, &all, law, false).unwrap();
-        rigidity(&net).unwrap()
+        let dense = rigidity_by(&net, Some(RankMethod::DenseEigenvalues)).unwrap();
+        let sparse = rigidity_by(&net, Some(RankMethod::SparseInertia)).unwrap();
+        assert_eq!(
+            (dense.rank, dense.mechanisms, dense.indeterminacy),
+            (sparse.rank, sparse.mechanisms, sparse.indeterminacy),
+            "dense and sparse counts differ"
+        );
+        dense
+    }
+
+    /// The sparse count (Sylvester's inertia) against the dense eigenvalues on the committed
+    /// equilibrated starts: a 1400-disk adhesive packing with and without rolling resistance
+    /// and with frictionless contacts, and a 1372-sphere Hertz packing, frictionless and
+    /// frictional.
+    #[test]
+    fn sparse_rank_matches_dense_on_packings() {
+        // A start's grains, in contact where they overlap (the starts carry no contact list).
+        let start = |name: &str| {
+            let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../reference-inputs/starts/");
+            let s = Snapshot::read(std::path::Path::new(&format!("{dir}{name}"))).unwrap();
+            let (l, r) = (s.cell.lengths.clone(), s.particles.radius.clone());
+            let p: Vec<Vec<f64>> = s.particles.position.iter().map(|q| q.to_vec()).collect();
+            let mut b = Vec::new();
+            for i in 0..p.len() {
+                for j in i + 1..p.len() {
+                    let d = super::super::fixtures::branch(&l, &p[i], &p[j]);
+                    if d.iter().map(|x| x * x).sum::<f64>().sqrt() < r[i] + r[j] {
+                        b.push(bond(i, j, 1.0));
+                    }
+                }
+            }
+            snapshot(l, r, p, &b, false, Some(0.5))
+        };
+        let disks = start("grc07-type1-phi052-mu05-rr-classes.snap.json");
+        let spheres = start("ar07-D-10kPa-n1372.snap.json");
+        let hertz = |t: Option<f64>| ContactStiffness {
+            normal: NormalStiffness::Hertz { e_tilde: 1.0 },
+            tangential_ratio: t,
+            rolling: None,
+            attraction: None,
+        };
+        for (snap, law) in [
+            (&disks, linear(1.0, Some(1.0), Some(1e-4))),
+            (&disks, linear(1.0, Some(1.0), None)),
+            (&disks, linear(1.0, None, None)),
+            (&spheres, hertz(None)),
+            (&spheres, hertz(Some(0.8))),
+        ] {
+            let got = count(snap, &law);
+            assert!(
+                got.dofs > 2000 && got.mechanisms >= snap.dimension,
+                "{got:?}"
+            );
+        }
     }
 
     /// GRC07 §IV.B, Fig. 13 and App. A: N_f + H = M + K, K counting the 3 motions of an

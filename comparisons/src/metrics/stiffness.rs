@@ -317,55 +317,200 @@ pub struct Rigidity {
     pub mechanisms: usize,
     /// H = M − rank: the degree of force indeterminacy (hyperstaticity).
     pub indeterminacy: usize,
+    /// How the zero eigenvalues were counted.
+    pub method: RankMethod,
 }
 
-/// The most degrees of freedom [`rigidity`] counts (its dense eigenvalue solve is O(N_f³):
-/// ~4200 for 1400 disks with rotations takes seconds).
+/// The most degrees of freedom [`rigidity`] counts with the dense eigenvalue solve (O(N_f³):
+/// ~4200 for 1400 disks with rotations takes seconds); larger networks are counted by
+/// [`zero_modes_sparse`].
 pub const MAX_RIGIDITY_DOFS: usize = 6000;
 
+/// How [`rigidity`] counted the zero eigenvalues of ᵀG·G.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RankMethod {
+    /// All eigenvalues, dense (up to [`MAX_RIGIDITY_DOFS`]).
+    DenseEigenvalues,
+    /// Sylvester's inertia of a sparse LDLᵀ ([`zero_modes_sparse`]).
+    SparseInertia,
+}
+
 /// Counts mechanisms and force indeterminacy from the eigenvalues of ᵀG·G (unit stiffnesses,
-/// the cell fixed): eigenvalues below 1e-9 of the largest are zero. `None` above
-/// [`MAX_RIGIDITY_DOFS`] or for a network without constraints.
+/// the cell fixed): eigenvalues below 1e-9 of the largest are zero. Dense up to
+/// [`MAX_RIGIDITY_DOFS`], sparse above. `None` for a network without constraints, or if the
+/// sparse factorization meets an exactly zero pivot.
 pub fn rigidity(net: &Network) -> Option<Rigidity> {
+    rigidity_by(net, None)
+}
+
+/// [`rigidity`] with the method forced (`None`: by size).
+pub fn rigidity_by(net: &Network, method: Option<RankMethod>) -> Option<Rigidity> {
     if net.strain {
-        return rigidity(&Network {
-            strain: false,
-            dofs: net.dofs - net.dimension,
-            constraints: net
-                .constraints
-                .iter()
-                .map(|c| Constraint {
-                    entries: c
-                        .entries
-                        .iter()
-                        .copied()
-                        .filter(|&(a, _)| a < net.dofs - net.dimension)
-                        .collect(),
-                    ..c.clone()
-                })
-                .collect(),
-            ..net.clone()
-        });
+        return rigidity_by(
+            &Network {
+                strain: false,
+                dofs: net.dofs - net.dimension,
+                constraints: net
+                    .constraints
+                    .iter()
+                    .map(|c| Constraint {
+                        entries: c
+                            .entries
+                            .iter()
+                            .copied()
+                            .filter(|&(a, _)| a < net.dofs - net.dimension)
+                            .collect(),
+                        ..c.clone()
+                    })
+                    .collect(),
+                ..net.clone()
+            },
+            method,
+        );
     }
     let n = net.dofs;
-    if n == 0 || n > MAX_RIGIDITY_DOFS || net.constraints.is_empty() {
+    if n == 0 || net.constraints.is_empty() {
         return None;
     }
-    let mut m = faer::Mat::<f64>::zeros(n, n);
-    for (r, c, v) in net.matrix(true) {
-        m[(r, c)] = v;
-    }
-    let ev = m.self_adjoint_eigenvalues(faer::Side::Lower).ok()?;
-    let top = ev.iter().copied().fold(0.0, f64::max);
-    let rank = ev.iter().filter(|&&x| x > 1e-9 * top).count();
+    let method = method.unwrap_or(if n <= MAX_RIGIDITY_DOFS {
+        RankMethod::DenseEigenvalues
+    } else {
+        RankMethod::SparseInertia
+    });
+    let entries = net.matrix(true);
+    let zero = match method {
+        RankMethod::DenseEigenvalues => {
+            let mut m = faer::Mat::<f64>::zeros(n, n);
+            for &(r, c, v) in &entries {
+                m[(r, c)] = v;
+            }
+            let ev = m.self_adjoint_eigenvalues(faer::Side::Lower).ok()?;
+            let top = ev.iter().copied().fold(0.0, f64::max);
+            ev.iter().filter(|&&x| x <= ZERO_EIGENVALUE * top).count()
+        }
+        RankMethod::SparseInertia => zero_modes_sparse(n, &entries)?,
+    };
+    let rank = n - zero;
     let constraints = net.constraints.len();
     Some(Rigidity {
         dofs: n,
         constraints,
         rank,
-        mechanisms: n - rank,
+        mechanisms: zero,
         indeterminacy: constraints - rank,
+        method,
     })
+}
+
+/// An eigenvalue of ᵀG·G at most this fraction of the largest counts as zero.
+const ZERO_EIGENVALUE: f64 = 1e-9;
+
+/// The eigenvalues of the symmetric positive semi-definite `n × n` matrix `entries` (both
+/// triangles, as [`Network::matrix`]) at most 1e-9 of its largest, counted without computing
+/// them: by Sylvester's law of inertia, the number of eigenvalues below τ is the number of
+/// negative pivots of the LDLᵀ factorization of A − τI (any symmetric ordering; here AMD, a
+/// simplicial factor, whose diagonal is D). The largest eigenvalue comes from power
+/// iteration. `None` on an exactly zero pivot.
+pub fn zero_modes_sparse(n: usize, entries: &[(usize, usize, f64)]) -> Option<usize> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+    use faer::sparse::linalg::cholesky::{
+        factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering,
+    };
+    use faer::sparse::linalg::SupernodalThreshold;
+    use faer::sparse::{SparseColMat, Triplet};
+    use faer::{Par, Side};
+
+    let tau = ZERO_EIGENVALUE * largest_eigenvalue(n, entries);
+    let mut trip: Vec<Triplet<usize, usize, f64>> = entries
+        .iter()
+        .filter(|&&(r, c, _)| r > c)
+        .map(|&(r, c, v)| Triplet::new(r, c, v))
+        .collect();
+    // The whole diagonal, shifted (a dof in no constraint has a zero one).
+    let mut diagonal = vec![-tau; n];
+    for &(r, c, v) in entries {
+        if r == c {
+            diagonal[r] += v;
+        }
+    }
+    trip.extend(
+        diagonal
+            .iter()
+            .enumerate()
+            .map(|(a, &v)| Triplet::new(a, a, v)),
+    );
+    let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).ok()?;
+    let symbolic = factorize_symbolic_cholesky(
+        a.symbolic(),
+        Side::Lower,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+            ..Default::default()
+        },
+    )
+    .ok()?;
+    let mut values = vec![0.0; symbolic.len_val()];
+    let mut buffer = MemBuffer::new(
+        symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+    );
+    symbolic
+        .factorize_numeric_ldlt(
+            &mut values,
+            a.as_ref(),
+            Side::Lower,
+            LdltRegularization::default(),
+            Par::Seq,
+            MemStack::new(&mut buffer),
+            Default::default(),
+        )
+        .ok()?;
+    let SymbolicCholeskyRaw::Simplicial(factor) = symbolic.raw() else {
+        return None;
+    };
+    // Each column of the simplicial factor starts with its diagonal entry: D.
+    let (start, row) = (factor.col_ptr(), factor.row_idx());
+    let mut negative = 0;
+    for j in 0..n {
+        if row[start[j]] != j {
+            return None;
+        }
+        if values[start[j]] < 0.0 {
+            negative += 1;
+        }
+    }
+    Some(negative)
+}
+
+/// The largest eigenvalue of a symmetric positive semi-definite matrix (both triangles), by
+/// power iteration to 1e-3 (the zero threshold needs only its order of magnitude).
+fn largest_eigenvalue(n: usize, entries: &[(usize, usize, f64)]) -> f64 {
+    // A start with a component along every eigenvector, in practice.
+    let mut x: Vec<f64> = (0..n)
+        .map(|a| 1.0 + ((a * 7919) % 101) as f64 / 101.0)
+        .collect();
+    let mut y = vec![0.0; n];
+    let mut lambda = 0.0;
+    for _ in 0..1000 {
+        let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if norm == 0.0 {
+            return 0.0;
+        }
+        x.iter_mut().for_each(|v| *v /= norm);
+        y.iter_mut().for_each(|v| *v = 0.0);
+        for &(r, c, v) in entries {
+            y[r] += v * x[c];
+        }
+        let next: f64 = x.iter().zip(&y).map(|(a, b)| a * b).sum();
+        std::mem::swap(&mut x, &mut y);
+        if (next - lambda).abs() <= 1e-3 * next {
+            return next;
+        }
+        lambda = next;
+    }
+    lambda
 }
 
 impl ContactStiffness {

@@ -822,3 +822,33 @@ fn density_correlations_of_a_cohesive_2d_packing() {
     assert!(a.density.is_none());
     assert_eq!(value(&a.metric_values(), "R_w"), None);
 }
+
+/// [`MODULI_METRICS`] are exactly the metric keys that asking for the moduli adds.
+#[test]
+fn moduli_metric_keys_are_listed() {
+    use super::stiffness::{ContactStiffness, NormalStiffness};
+    let (l, r, p, b) = lattice(2, 4, 0.99, 0.5, 1.0);
+    let snap = snapshot(l, r, p, &b, false, Some(0.5));
+    let keys = |o: &Options| -> std::collections::BTreeSet<String> {
+        analyze(&snap, o)
+            .metric_values()
+            .into_iter()
+            .map(|(k, _)| k)
+            .collect()
+    };
+    let plain = keys(&Options::default());
+    let with = keys(&Options {
+        moduli: Some(ContactStiffness {
+            normal: NormalStiffness::Constant(1e3),
+            tangential_ratio: Some(0.5),
+            rolling: None,
+            attraction: None,
+        }),
+        ..Options::default()
+    });
+    let added: Vec<&str> = with.difference(&plain).map(|k| k.as_str()).collect();
+    let mut listed = MODULI_METRICS.to_vec();
+    listed.sort_unstable();
+    assert_eq!(added, listed);
+    assert!(plain.is_subset(&with));
+}

@@ -1,6 +1,7 @@
 //! Rendering an [`Analysis`]: a markdown table (`metric | value | note`) or JSON.
 
 use super::format::sig6;
+use crate::metrics::stiffness::RankMethod;
 use crate::metrics::Analysis;
 use std::fmt::Write;
 
@@ -356,8 +357,13 @@ pub fn to_markdown(a: &Analysis) -> String {
                     "mechanisms K, indeterminacy H",
                     format!("{}, {}", r.mechanisms, r.indeterminacy),
                     &format!(
-                        "cell fixed, GRC07 App. A: N_f + H = M + K with N_f = {}, M = {} (K counts the global translations)",
-                        r.dofs, r.constraints
+                        "cell fixed, GRC07 App. A: N_f + H = M + K with N_f = {}, M = {} (K counts the global translations; zero eigenvalues of ᵀG·G counted {})",
+                        r.dofs,
+                        r.constraints,
+                        match r.method {
+                            RankMethod::DenseEigenvalues => "from all eigenvalues",
+                            RankMethod::SparseInertia => "by the inertia of a sparse LDLᵀ",
+                        }
                     ),
                 );
             }

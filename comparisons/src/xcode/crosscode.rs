@@ -412,8 +412,10 @@ impl Comparison {
         s.push_str(" --- |\n");
         let cohesive = self.rows.iter().any(|r| r.metric == "z_plus");
         for r in &self.rows {
+            // Headline metrics, and every metric judged against a band.
             let shown = TABLE_METRICS.contains(&r.metric.as_str())
-                || (cohesive && COHESIVE_TABLE_METRICS.contains(&r.metric.as_str()));
+                || (cohesive && COHESIVE_TABLE_METRICS.contains(&r.metric.as_str()))
+                || r.tolerance.is_some();
             if !all_metrics && !shown {
                 continue;
             }
