@@ -4,8 +4,9 @@
 //! smoke scenes in ours and LIGGGHTS (SJKR) or YADE (DMT), through `grainbench compare`. Asserts that every run ends at
 //! equilibrium, that the contact-stress pressure equals the target within the criterion
 //! (1e-4 P) in every code, and that Φ, z* and x0 (and in `xcode-smoke` the elastic moduli B
-//! and G of the final state) agree with ours within k·√2·(seed-to-seed s.d. of our engine), the bands of golden/xcode-bands.toml (k = 3; spreads from seeds 1–9,
-//! derivation in that file).
+//! and G of the final state) agree with ours within k·√2·(seed-to-seed s.d. of our engine),
+//! the bands of golden/xcode-bands.toml (k = 3; spreads from seeds 1–9, derivation in that
+//! file).
 //!
 //! Where a binary is missing the code is skipped with a notice, except under CI (CI=true),
 //! where `ci/install-externals.sh` must have installed all four.
