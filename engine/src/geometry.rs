@@ -33,7 +33,7 @@ pub trait VectorOps:
         self.norm_squared().sqrt()
     }
     fn is_finite(&self) -> bool;
-    /// Components as a slice-like vector (for snapshots).
+    /// Components as a `Vec` (cell lengths and other per-axis lists).
     fn to_vec(&self) -> Vec<f64>;
     /// Components stored inline (a snapshot's [`crate::snapshot::Vector`]).
     fn components(&self) -> smallvec::SmallVec<[f64; 3]>;

@@ -1,7 +1,50 @@
-//! Connectivity of an interaction network in the periodic cell: the axes it wraps.
+//! Connectivity of an interaction network in the periodic cell: the edges at each grain, the
+//! axes it wraps.
 
-/// Axes along which the network of `edges` — `(i, j, branch)` with the branch r_j − r_i taken
-/// to the nearest image — wraps the periodic cell of sides `lengths`: some closed path of
+/// The edges at each grain in compressed rows: [`Incidence::of`] lists the indices of the
+/// edges with that grain as an end, in edge order. 32-bit indices and one flat array: this runs
+/// on the first check of large packings (the peak of a run's memory) and in the rattler
+/// removal, where a list per grain costs ten times as much.
+pub struct Incidence {
+    start: Vec<usize>,
+    edge: Vec<u32>,
+}
+
+impl Incidence {
+    /// The incidence of `n` grains joined by the edges whose ends `ends` yields, in order
+    /// (walked twice).
+    ///
+    /// # Panics
+    /// If an end is ≥ `n`.
+    pub fn new(n: usize, ends: impl Iterator<Item = (usize, usize)> + Clone) -> Self {
+        let mut start = vec![0usize; n + 1];
+        for (i, j) in ends.clone() {
+            start[i + 1] += 1;
+            start[j + 1] += 1;
+        }
+        for k in 0..n {
+            start[k + 1] += start[k];
+        }
+        let mut fill = start[..n].to_vec();
+        let mut edge = vec![0u32; start[n]];
+        for (k, (i, j)) in ends.enumerate() {
+            for g in [i, j] {
+                edge[fill[g]] = k as u32;
+                fill[g] += 1;
+            }
+        }
+        Incidence { start, edge }
+    }
+
+    /// Indices of the edges at grain `g`.
+    pub fn of(&self, g: usize) -> &[u32] {
+        &self.edge[self.start[g]..self.start[g + 1]]
+    }
+}
+
+/// Axes along which the network of `edges` — grains `pair(e) = (i, j)` joined by `branch(e)`,
+/// r_j − r_i taken to the nearest image (asked for once per edge and end, when the walk reaches
+/// it) — wraps the periodic cell of sides `lengths`: some closed path of
 /// interactions crosses the cell a net non-zero number of times along that axis.
 ///
 /// A network that does not wrap along an axis cannot carry stress along it at any cell length:
@@ -14,33 +57,14 @@ pub fn wrapped_axes<E, B>(
     lengths: &[f64],
     n: usize,
     edges: &[E],
-    ends: impl Fn(&E) -> (usize, usize, B),
+    pair: impl Fn(&E) -> (usize, usize),
+    branch: impl Fn(&E) -> B,
 ) -> Vec<bool>
 where
     B: std::ops::Index<usize, Output = f64>,
 {
     let d = lengths.len();
-    // Adjacency in compressed rows: the indices of each grain's edges (32 bits: this runs on
-    // the first check of large packings, at the peak of a run's memory).
-    let mut start = vec![0usize; n + 1];
-    for e in edges {
-        let (i, j, _) = ends(e);
-        start[i + 1] += 1;
-        start[j + 1] += 1;
-    }
-    for k in 0..n {
-        start[k + 1] += start[k];
-    }
-    let mut fill = start.clone();
-    let mut adj = vec![0u32; start[n]];
-    for (k, e) in edges.iter().enumerate() {
-        let (i, j, _) = ends(e);
-        for g in [i, j] {
-            adj[fill[g]] = k as u32;
-            fill[g] += 1;
-        }
-    }
-    drop(fill);
+    let incidence = Incidence::new(n, edges.iter().map(&pair));
     // Breadth-first walk: each grain gets an unwrapped position (`offset`, d values a grain)
     // relative to the first grain of its cluster; an edge closing a loop whose branches sum to
     // a non-zero lattice vector wraps the cell.
@@ -55,8 +79,9 @@ where
         placed[first] = true;
         queue.push_back(first);
         while let Some(i) = queue.pop_front() {
-            for &e in &adj[start[i]..start[i + 1]] {
-                let (from, to, branch) = ends(&edges[e as usize]);
+            for &e in incidence.of(i) {
+                let edge = &edges[e as usize];
+                let ((from, to), branch) = (pair(edge), branch(edge));
                 // The branch points from `from` to `to`: walked from its other end, reversed.
                 let (j, sign) = if from == i { (to, 1.0) } else { (from, -1.0) };
                 for a in 0..d {
@@ -88,7 +113,13 @@ mod tests {
     }
 
     fn axes(lengths: &[f64], n: usize, edges: &[(usize, usize, Vec<f64>)]) -> Vec<bool> {
-        wrapped_axes(lengths, n, edges, |(i, j, b)| (*i, *j, b.clone()))
+        wrapped_axes(
+            lengths,
+            n,
+            edges,
+            |(i, j, _)| (*i, *j),
+            |(_, _, b)| b.clone(),
+        )
     }
 
     #[test]

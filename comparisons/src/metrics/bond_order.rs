@@ -107,12 +107,27 @@ fn harmonics_into(l: usize, n: &[f64; 3], out: &mut [f64]) {
     }
 }
 
+/// Sums of Y_4m and Y_6m over bonds.
+type Sums46 = ([f64; 9], [f64; 13]);
+
 /// Y_4m and Y_6m at the unit vector `u`.
-fn y46(u: &[f64; 3]) -> ([f64; 9], [f64; 13]) {
+fn y46(u: &[f64; 3]) -> Sums46 {
     let (mut y4, mut y6) = ([0.0; 9], [0.0; 13]);
     harmonics_into(4, u, &mut y4);
     harmonics_into(6, u, &mut y6);
     (y4, y6)
+}
+
+/// `sums += y`.
+fn add46(sums: (&mut [f64; 9], &mut [f64; 13]), y: &Sums46) {
+    sums.0.iter_mut().zip(&y.0).for_each(|(a, b)| *a += b);
+    sums.1.iter_mut().zip(&y.1).for_each(|(a, b)| *a += b);
+}
+
+/// The unit vector of a separation `r` of squared length `r2`; `None` for a zero or NaN one.
+fn unit(r: &Point, r2: f64) -> Option<[f64; 3]> {
+    let len = r2.sqrt();
+    (len > 0.0).then(|| [r[0] / len, r[1] / len, r[2] / len])
 }
 
 /// `[4π/(2l+1) Σ_m q_m²]^{1/2}` of AR07 (31).
@@ -165,11 +180,9 @@ fn for_each_bond(
     mut f: impl FnMut(usize, usize, [f64; 3]),
 ) {
     for_each_pair(lengths, pts, cutoff, |i, j, r: &Point, r2| {
-        let len = r2.sqrt();
-        if len.is_nan() || len <= 0.0 {
-            return;
+        if let Some(u) = unit(r, r2) {
+            f(i, j, u);
         }
-        f(i, j, [r[0] / len, r[1] / len, r[2] / len]);
     });
 }
 
@@ -185,14 +198,12 @@ fn bonds(lengths: &[f64], pts: &[Point], cutoff: f64) -> Bonds {
     };
     for_each_bond(lengths, pts, cutoff, |i, j, u| {
         // Even l: Y_lm(−u) = Y_lm(u), both ends get the same harmonics.
-        let (y4, y6) = y46(&u);
+        let y = y46(&u);
         for g in [i, j] {
             b.count[g] += 1;
-            b.q4[g].iter_mut().zip(&y4).for_each(|(a, y)| *a += y);
-            b.q6[g].iter_mut().zip(&y6).for_each(|(a, y)| *a += y);
+            add46((&mut b.q4[g], &mut b.q6[g]), &y);
         }
-        b.g4.iter_mut().zip(&y4).for_each(|(a, y)| *a += y);
-        b.g6.iter_mut().zip(&y6).for_each(|(a, y)| *a += y);
+        add46((&mut b.g4, &mut b.g6), &y);
         b.total += 1;
     });
     b
@@ -209,14 +220,10 @@ fn local_orders(lengths: &[f64], pts: &[Point], cutoff: f64) -> Vec<Option<(f64,
         .map(|p| {
             let (mut q4, mut q6, mut k) = ([0.0; 9], [0.0; 13], 0usize);
             grid.query(p, |_, r, r2| {
-                let len = r2.sqrt();
-                if len.is_nan() || len <= 0.0 {
-                    return;
+                if let Some(u) = unit(r, r2) {
+                    add46((&mut q4, &mut q6), &y46(&u));
+                    k += 1;
                 }
-                let (y4, y6) = y46(&[r[0] / len, r[1] / len, r[2] / len]);
-                q4.iter_mut().zip(&y4).for_each(|(a, y)| *a += y);
-                q6.iter_mut().zip(&y6).for_each(|(a, y)| *a += y);
-                k += 1;
             });
             (k > 0).then(|| (q_norm(4, &q4) / k as f64, q_norm(6, &q6) / k as f64))
         })

@@ -424,9 +424,13 @@ pub fn analyze(snap: &Snapshot, opts: &Options) -> Analysis {
             z_zero: per_grain(nc - rep.len() - att.len()),
             distant: backbone.iter().filter(|c| c.gap > 0.0).count(),
             clusters: clusters(n, &pairs),
-            wrapped_axes: wrapped_axes(&snap.cell.lengths, n, &counted, |c| {
-                (c.i, c.j, c.branch.clone())
-            })
+            wrapped_axes: wrapped_axes(
+                &snap.cell.lengths,
+                n,
+                &counted,
+                |c| (c.i, c.j),
+                |c| c.branch.clone(),
+            )
             .into_iter()
             .filter(|&w| w)
             .count(),

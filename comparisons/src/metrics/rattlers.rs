@@ -20,6 +20,7 @@
 //! every grain below the threshold, sweep `s + 1` the grains that fell below it in sweep `s`.
 //! The result is the same as recounting all grains after each sweep.
 
+use grainbench_engine::network::Incidence;
 use grainbench_engine::snapshot::Snapshot;
 use serde::Serialize;
 
@@ -137,22 +138,7 @@ pub fn find_rattlers(n: usize, pairs: &[(usize, usize)], rule: Rule) -> Rattlers
         degree[i] += 1;
         degree[j] += 1;
     }
-    // The contacts of grain g, in the order of `pairs`: incident[start[g]..start[g + 1]]
-    // (one flat array: a list per grain costs ten times the memory on large packings).
-    let mut start = Vec::with_capacity(n + 1);
-    start.push(0usize);
-    for &d in &degree {
-        start.push(start[start.len() - 1] + d);
-    }
-    let mut incident = vec![0usize; 2 * pairs.len()];
-    let mut fill = start[..n].to_vec();
-    for (k, &(i, j)) in pairs.iter().enumerate() {
-        for g in [i, j] {
-            incident[fill[g]] = k;
-            fill[g] += 1;
-        }
-    }
-    drop(fill);
+    let incident = Incidence::new(n, pairs.iter().copied());
 
     let mut is_rattler: Vec<bool> = degree.iter().map(|&z| z < min).collect();
     let mut kept = vec![true; pairs.len()];
@@ -162,7 +148,8 @@ pub fn find_rattlers(n: usize, pairs: &[(usize, usize)], rule: Rule) -> Rattlers
         sweeps += 1;
         let mut next = Vec::new();
         for &g in &frontier {
-            for &k in &incident[start[g]..start[g + 1]] {
+            for &k in incident.of(g) {
+                let k = k as usize;
                 if !kept[k] {
                     continue;
                 }

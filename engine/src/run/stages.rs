@@ -382,10 +382,13 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     // The pairs only: each branch is computed again when the walk reaches it.
                     let mut edges = Vec::with_capacity(inter.len());
                     sys.for_each_interaction(|c| edges.push((c.i as u32, c.j as u32)));
-                    network::wrapped_axes(&sys.cell.l.to_vec(), sys.len(), &edges, |&(i, j)| {
-                        let (i, j) = (i as usize, j as usize);
-                        (i, j, branch::<D>(&sys.s[i], &sys.s[j], &sys.cell.l))
-                    })
+                    network::wrapped_axes(
+                        &sys.cell.l.to_vec(),
+                        sys.len(),
+                        &edges,
+                        |&(i, j)| (i as usize, j as usize),
+                        |&(i, j)| branch::<D>(&sys.s[i as usize], &sys.s[j as usize], &sys.cell.l),
+                    )
                 });
                 first_check = false;
                 cb(&Progress {
