@@ -23,18 +23,30 @@ pub fn install_stop_handler() {
     });
 }
 
-/// Sizes the global rayon pool (default: all cores).
+/// Sizes the global rayon pool (default: all cores, or `RAYON_NUM_THREADS`), its threads
+/// with the main thread's 8 MiB stacks.
 pub fn set_threads(threads: Option<usize>) -> Result<()> {
     if threads == Some(0) {
         bail!("-j 0: give a thread count ≥ 1, or omit -j to use every core");
     }
-    if let Some(t) = threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .context("setting the thread count")?;
-    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .stack_size(8 << 20)
+        .build_global()
+        .context("setting the thread count")?;
     Ok(())
+}
+
+/// Sizes the global pool ([`set_threads`]) and runs `work` on one of its threads, so that
+/// each parallel pass of a step starts on a worker: with one thread it runs in place, with
+/// more only the other workers are woken. Run from the main thread, every pass was handed to
+/// the pool and back, a sleep and a wake-up each way, several times a step (issue 15).
+pub fn on_threads<R: Send>(
+    threads: Option<usize>,
+    work: impl FnOnce() -> Result<R> + Send,
+) -> Result<R> {
+    set_threads(threads)?;
+    rayon::scope(|_| work())
 }
 
 /// Loads a scene from a file, or an embedded one by name.

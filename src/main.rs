@@ -7,7 +7,7 @@
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
-use common::{install_stop_handler, set_threads};
+use common::{install_stop_handler, on_threads};
 use run::RunFlags;
 use std::path::PathBuf;
 
@@ -332,23 +332,21 @@ fn dispatch(cli: Cli) -> Result<i32> {
             all_metrics,
             quiet,
         } => {
-            set_threads(threads)?;
             install_stop_handler();
-            compare::compare(&compare::Args {
-                scene,
-                codes,
-                seeds,
-                out,
-                time_limit,
-                np,
-                quiet,
-                all_metrics,
+            on_threads(threads, || {
+                compare::compare(&compare::Args {
+                    scene,
+                    codes,
+                    seeds,
+                    out,
+                    time_limit,
+                    np,
+                    quiet,
+                    all_metrics,
+                })
             })
         }
-        Command::Accuracy(args) => {
-            set_threads(args.threads)?;
-            accuracy::accuracy(&args)
-        }
+        Command::Accuracy(args) => on_threads(args.threads, || accuracy::accuracy(&args)),
         Command::Golden {
             action: GoldenAction::Update { scene, codes, from },
         } => compare::golden_update(&scene, &codes, from, None),
@@ -368,8 +366,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             dump_every,
             trace_every,
             stage_snapshots,
-        } => {
-            set_threads(threads)?;
+        } => on_threads(threads, || {
             if let Some(t) = trace_every {
                 if !(t.is_finite() && t > 0.0) {
                     anyhow::bail!(
@@ -395,7 +392,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 stage_snapshots,
             };
             run::run_command(scene.as_deref(), out, seed, require_equilibrium, &flags)
-        }
+        }),
         Command::Analyze {
             snapshot,
             json,
@@ -438,8 +435,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             threads,
             quiet,
             checkpoint_every,
-        } => {
-            set_threads(threads)?;
+        } => on_threads(threads, || {
             reproduce::reproduce(&reproduce::Args {
                 paper,
                 state,
@@ -459,7 +455,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                     stage_snapshots: false,
                 },
             })
-        }
+        }),
         Command::Decks {
             scenes,
             all,
@@ -476,10 +472,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             output,
             threads,
             quiet,
-        } => {
-            set_threads(threads)?;
-            exchange::run_exchange(&input, &output, quiet)
-        }
+        } => on_threads(threads, || exchange::run_exchange(&input, &output, quiet)),
     }
 }
 

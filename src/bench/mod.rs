@@ -4,7 +4,7 @@
 //! child process and the ratio to our engine. `--scale N1,N2,…` times our engine alone on
 //! dense packings of growing size ([`scale`]).
 
-use crate::common::{install_stop_handler, load_scene, set_threads, STOP};
+use crate::common::{install_stop_handler, load_scene, on_threads, STOP};
 use crate::external;
 use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
@@ -142,20 +142,21 @@ fn child_run(a: &Args) -> Result<i32> {
     let (Some(scene), Some(out)) = (&a.scene, &a.out) else {
         bail!("--child-run needs a scene file and --out");
     };
-    set_threads(Some(a.threads[0]))?;
-    let scene = load_scene(scene)?;
-    let flags = RunFlags {
-        quiet: false,
-        report: false,
-        resume: false,
-        // A harness scratch directory: a leftover checkpoint is not a run to keep.
-        force: true,
-        checkpoint_every: 1e12,
-        dump_every: None,
-        trace_every: None,
-        stage_snapshots: false,
-    };
-    Ok(run(&scene, out, &flags)?.0)
+    on_threads(Some(a.threads[0]), || {
+        let scene = load_scene(scene)?;
+        let flags = RunFlags {
+            quiet: false,
+            report: false,
+            resume: false,
+            // A harness scratch directory: a leftover checkpoint is not a run to keep.
+            force: true,
+            checkpoint_every: 1e12,
+            dump_every: None,
+            trace_every: None,
+            stage_snapshots: false,
+        };
+        Ok(run(&scene, out, &flags)?.0)
+    })
 }
 
 /// A code, its column of results, and its binary and deck (external codes that can run).

@@ -8,7 +8,7 @@
 //! small strain-rate cap (1e-3) so that it stays dense over the timed steps; it is not
 //! equilibrated.
 
-use crate::common::{install_stop_handler, set_threads, STOP};
+use crate::common::{install_stop_handler, on_threads, STOP};
 use crate::external;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::report::plots::{line_plot, Axis, LinePlot, Marks, Series};
@@ -16,6 +16,7 @@ use grainbench_comparisons::stats::Stat;
 use grainbench_engine::cell::{Cell, Control};
 use grainbench_engine::contact::slider::Coulomb;
 use grainbench_engine::geometry::{Dim, VectorOps as _, D3};
+use grainbench_engine::parallel::KeepAwake;
 use grainbench_engine::run::{cell_mass, compress_until, hertz_mindlin_law, time_step};
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;
@@ -160,7 +161,11 @@ fn vm_hwm() -> Option<u64> {
 
 /// The child: prepares one size, times `steps` steps, prints a [`Point`] as JSON.
 pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
-    set_threads(Some(threads))?;
+    on_threads(Some(threads), || child_on_pool(n_wanted, steps, threads))
+}
+
+/// [`child`] on a thread of the sized pool.
+fn child_on_pool(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
     let t0 = Instant::now();
     let (copies, base) = tiling(n_wanted);
     let (s0, l0) = random_packing(base)?;
@@ -183,7 +188,9 @@ pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
     let mut sys = System::new(law, cell, s, &vec![1.0; n], scene.numerics.skin);
     sys.dt = time_step(&scene, &sys).0;
     let segment = (steps / SEGMENTS).max(1);
-    let (prepare_seconds, z_start, segment_ns) = rayon::scope(|_| {
+    // On a thread of the pool (`on_threads`), the other threads kept awake as in a run.
+    let (prepare_seconds, z_start, segment_ns) = {
+        let _awake = KeepAwake::new();
         sys.init_forces();
         let z_start = coordination(&sys);
         let prep = t0.elapsed().as_secs_f64();
@@ -196,7 +203,7 @@ pub fn child(n_wanted: usize, steps: u64, threads: usize) -> Result<i32> {
             ns.push(t.elapsed().as_secs_f64() * 1e9 / (segment as f64 * n as f64));
         }
         (prep, z_start, ns)
-    });
+    };
     let vm_hwm_bytes = vm_hwm();
     let z_end = coordination(&sys);
     let point = Point {

@@ -6,9 +6,10 @@
 //!
 //! A scalar range test first sends the listed pairs within reach to the batches (7668 of
 //! 12936 in the `kernels` bench packing), so lanes are not spent on pairs that only clear
-//! their springs. Each lane performs the scalar path's IEEE operations in the same order (no fused
-//! multiply–add, the same divisions), and the virial and largest overlap are summed lane by
-//! lane in pair order, so springs, forces, virial and overlap are bit for bit the scalar ones
+//! their springs; it tests a block of pairs, without a branch on the outcome, before the
+//! block's batches run. Each lane performs the scalar path's IEEE operations in the same
+//! order (no fused multiply–add, the same divisions), and the virial and largest overlap are
+//! summed lane by lane in pair order, so springs, forces, virial and overlap are bit for bit the scalar ones
 //! (`tests/simd_kernel.rs`) and results stay identical for any thread count. The rare lanes
 //! whose spring turned by more than ~3 mrad in a step, or pivoted by more than 1e-3 rad, take
 //! the scalar formula for that part.
@@ -111,7 +112,8 @@ mod avx {
 
     /// Lanes per batch: one AVX register. Eight lanes in two registers (two chains of square
     /// roots in flight) spill the sixteen registers and ran 14 % slower (criterion `kernels`,
-    /// 345.6 µs against 302.9 µs, 2026-12-05).
+    /// 345.6 µs against 302.9 µs, 2026-12-05); eight in one AVX-512 register, bit for bit the
+    /// same, ran 11 % slower on a Sapphire Rapids Xeon (305 against 274 µs, 2026-12-06).
     const W: usize = 4;
 
     #[derive(Clone, Copy)]
@@ -284,6 +286,11 @@ mod avx {
         gather(v, idx, |x| *x)
     }
 
+    /// Listed pairs range-tested per block before its batches run: the test writes every pair
+    /// to the next free slot and advances by whether it is within reach, so that an
+    /// unpredictable outcome costs no branch (1.10× whole runs of the dense D, 2026-12-06).
+    const BLOCK: usize = 64;
+
     /// `System::force_chunk` for `law`, four pairs within reach at a time.
     #[target_feature(enable = "avx")]
     pub fn force_chunk<F: BatchFriction>(
@@ -292,10 +299,13 @@ mod avx {
     ) -> ChunkSum {
         let mut sum: ChunkSum = ([[0.0; 3]; 3], (0.0, 0, 0));
         let mut lanes = Lanes {
-            pair: [(0, 0); W],
-            r: [[0.0; W]; 3],
+            pair: [(0, 0); BLOCK + W],
+            r: [[0.0; BLOCK + W]; 3],
+            full: 0,
+            out: [0; BLOCK],
+            empty: 0,
         };
-        let mut full = 0;
+        let mut tested = 0;
         for i in ch.rows.clone() {
             let (si, ri) = (ch.s[i], ch.radius[i]);
             for p in ch.row_start[i] as usize..ch.row_start[i + 1] as usize {
@@ -304,24 +314,23 @@ mod avx {
                 let j = ch.partner[p] as usize;
                 let r = branch::<D3>(&si, &ch.s[j], &ch.l);
                 let cut = ri + ch.radius[j];
-                if r.norm_squared() >= cut * cut {
-                    let k = p - ch.first;
-                    ch.hist[k] = Spring::default();
-                    ch.f[k] = V3::zeros();
-                    ch.c[k] = V3::zeros();
-                    continue;
-                }
-                lanes.pair[full] = (i, p);
+                let reach = r.norm_squared() < cut * cut;
+                lanes.pair[lanes.full] = (i, p);
                 for a in 0..3 {
-                    lanes.r[a][full] = r[a];
+                    lanes.r[a][lanes.full] = r[a];
                 }
-                full += 1;
-                if full == W {
-                    batch(law, ch, &lanes, W, &mut sum);
-                    full = 0;
+                lanes.full += reach as usize;
+                lanes.out[lanes.empty] = p - ch.first;
+                lanes.empty += !reach as usize;
+                tested += 1;
+                if tested == BLOCK {
+                    flush(law, ch, &mut lanes, &mut sum);
+                    tested = 0;
                 }
             }
         }
+        flush(law, ch, &mut lanes, &mut sum);
+        let full = lanes.full;
         if full > 0 {
             // Pad with copies of the first pair; only the first `full` lanes are stored.
             for l in full..W {
@@ -330,36 +339,73 @@ mod avx {
                     lanes.r[a][l] = lanes.r[a][0];
                 }
             }
-            batch(law, ch, &lanes, full, &mut sum);
+            batch(law, ch, &lanes, 0, full, &mut sum);
         }
         sum
     }
 
-    /// Pairs within reach, gathered by the range test: (grain i, list index p) and the branch
-    /// vector r = L·(s_j − s_i) of each lane.
-    struct Lanes {
-        pair: [(usize, usize); W],
-        r: [[f64; W]; 3],
+    /// Clears the springs, forces and moments of the block's pairs out of reach and runs its
+    /// whole batches; the rest (fewer than `W`) moves to the front for the next block.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    fn flush<F: BatchFriction>(
+        law: &HertzMindlin<F, NoCohesion>,
+        ch: &mut Chunk<'_>,
+        lanes: &mut Lanes,
+        sum: &mut ChunkSum,
+    ) {
+        for &k in &lanes.out[..lanes.empty] {
+            ch.hist[k] = Spring::default();
+            ch.f[k] = V3::zeros();
+            ch.c[k] = V3::zeros();
+        }
+        lanes.empty = 0;
+        let whole = lanes.full - lanes.full % W;
+        for start in (0..whole).step_by(W) {
+            batch(law, ch, lanes, start, W, sum);
+        }
+        for l in whole..lanes.full {
+            lanes.pair[l - whole] = lanes.pair[l];
+            for a in 0..3 {
+                lanes.r[a][l - whole] = lanes.r[a][l];
+            }
+        }
+        lanes.full -= whole;
     }
 
-    /// The pairs of `lanes`, of which the first `live` are stored.
+    /// The listed pairs of one block: those within reach, in list order, as (grain i, list
+    /// index p) with the branch vector r = L·(s_j − s_i) of each; then the chunk indices of
+    /// those out of reach.
+    struct Lanes {
+        pair: [(usize, usize); BLOCK + W],
+        r: [[f64; BLOCK + W]; 3],
+        full: usize,
+        out: [usize; BLOCK],
+        empty: usize,
+    }
+
+    /// The `W` pairs of `lanes` from `start`, of which the first `live` are stored.
     #[target_feature(enable = "avx")]
     #[inline]
     fn batch<F: BatchFriction>(
         law: &HertzMindlin<F, NoCohesion>,
         ch: &mut Chunk<'_>,
         lanes: &Lanes,
+        start: usize,
         live: usize,
         sum: &mut ChunkSum,
     ) {
-        let ii: [usize; W] = std::array::from_fn(|l| lanes.pair[l].0);
-        let jj: [usize; W] = std::array::from_fn(|l| ch.partner[lanes.pair[l].1] as usize);
-        let kk: [usize; W] = std::array::from_fn(|l| lanes.pair[l].1 - ch.first);
+        let pair: [(usize, usize); W] = std::array::from_fn(|l| lanes.pair[start + l]);
+        let rb: [[f64; W]; 3] =
+            std::array::from_fn(|a| std::array::from_fn(|l| lanes.r[a][start + l]));
+        let ii: [usize; W] = std::array::from_fn(|l| pair[l].0);
+        let jj: [usize; W] = std::array::from_fn(|l| ch.partner[pair[l].1] as usize);
+        let kk: [usize; W] = std::array::from_fn(|l| pair[l].1 - ch.first);
         let zero = splat(0.0);
         let one = splat(1.0);
 
         // System::pair_with, past its range test.
-        let r = V([from(lanes.r[0]), from(lanes.r[1]), from(lanes.r[2])]);
+        let r = V([from(rb[0]), from(rb[1]), from(rb[2])]);
         let ri = gather1(ch.radius, &ii);
         let rj = gather1(ch.radius, &jj);
         let d2 = r.dot(r);
@@ -472,7 +518,7 @@ mod avx {
             ch.f[k] = fk;
             for (a, row) in sum.0.iter_mut().enumerate() {
                 for (b, x) in row.iter_mut().enumerate() {
-                    *x += fk[a] * lanes.r[b][l];
+                    *x += fk[a] * rb[b][l];
                 }
             }
             if -gap[l] > sum.1 .0 * rmin[l] || gap[l].is_nan() {
