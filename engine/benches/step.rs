@@ -16,13 +16,14 @@
 //!
 //! Each sample starts from a fresh clone of the prepared system (clone not timed) and times
 //! that many consecutive steps inside `pool.install`, so the parallel loops fork from a worker
-//! of a pool of exactly 1 or 2 threads, and neighbour-list rebuilds count at their natural
-//! rate. The preparation is the same as in `examples/memory.rs`.
+//! of a pool of exactly 1 or 2 threads, the other worker kept awake between passes as in a run
+//! (`parallel::KeepAwake`), and neighbour-list rebuilds count at their natural rate. The preparation is the same as in `examples/memory.rs`.
 
 use criterion::{criterion_group, criterion_main, Criterion, SamplingMode, Throughput};
 use grainbench_engine::contact::slider::{Coulomb, Frictionless};
 use grainbench_engine::contact::ContactLaw;
 use grainbench_engine::geometry::{Dim, D2, D3};
+use grainbench_engine::parallel::KeepAwake;
 use grainbench_engine::system::System;
 use std::time::{Duration, Instant};
 
@@ -63,6 +64,8 @@ fn bench_step<D: Dim, L: ContactLaw<D>>(c: &mut Criterion, name: &str, sys: &Sys
             b.iter_custom(|iters| {
                 let mut s = sys.clone();
                 pool.install(|| {
+                    // The other worker kept awake between passes, as in a run.
+                    let _awake = KeepAwake::new();
                     let start = Instant::now();
                     for _ in 0..iters {
                         s.step();
