@@ -58,6 +58,8 @@ pub struct KeepAwake {
     stop: Arc<AtomicBool>,
     /// Whether this thread held one already (a run inside a run).
     held: bool,
+    /// Dropped on the thread that made it, where `held` is restored.
+    _here: std::marker::PhantomData<*const ()>,
 }
 
 thread_local! {
@@ -91,7 +93,11 @@ impl KeepAwake {
                 }
             }
         });
-        Some(KeepAwake { stop, held })
+        Some(KeepAwake {
+            stop,
+            held,
+            _here: std::marker::PhantomData,
+        })
     }
 }
 
@@ -138,7 +144,7 @@ mod tests {
     #[test]
     fn keep_awake_only_on_a_pool_thread_with_others() {
         assert!(KeepAwake::new().is_none() || rayon::current_thread_index().is_some());
-        assert!(in_pool(1, KeepAwake::new).is_none());
+        assert!(in_pool(1, || KeepAwake::new().is_none()));
         // Two threads: the other spins until the guard drops and takes the pool's work; the
         // caller's own copy of the spinner returns when the caller picks it up (else this
         // hangs).
