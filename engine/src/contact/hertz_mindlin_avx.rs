@@ -9,10 +9,10 @@
 //! their springs; it tests a block of pairs, without a branch on the outcome, before the
 //! block's batches run. Each lane performs the scalar path's IEEE operations in the same
 //! order (no fused multiply–add, the same divisions), and the virial and largest overlap are
-//! summed lane by lane in pair order, so springs, forces, virial and overlap are bit for bit the scalar ones
-//! (`tests/simd_kernel.rs`) and results stay identical for any thread count. The rare lanes
-//! whose spring turned by more than ~3 mrad in a step, or pivoted by more than 1e-3 rad, take
-//! the scalar formula for that part.
+//! summed lane by lane in pair order, so springs, forces, virial and overlap are bit for bit
+//! the scalar ones (`tests/simd_kernel.rs`) and results stay identical for any thread count.
+//! The rare lanes whose spring turned by more than ~3 mrad in a step, or pivoted by more than
+//! 1e-3 rad, take the scalar formula for that part.
 
 use super::hertz_mindlin::{HertzMindlin, NoCohesion};
 use super::slider::{Coulomb, NoSlip, Spring};

@@ -266,10 +266,10 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
     ctx.k_max = k_max;
     ctx.law = sys.law.describe();
     let builds0 = sys.nlist.builds;
-    let awake = crate::parallel::KeepAwake::new();
-    let stopped = run_stages(ctx, &mut sys, range, resume_at, opts);
-    drop(awake);
-    let stopped = stopped?;
+    let stopped = {
+        let _awake = crate::parallel::KeepAwake::new();
+        run_stages(ctx, &mut sys, range, resume_at, opts)
+    }?;
     ctx.neighbor_builds += sys.nlist.builds - builds0;
     ctx.at_threshold = contacts_at_threshold(&sys, &num);
     let status = if stopped {
