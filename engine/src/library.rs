@@ -85,6 +85,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "grc08-cycle",
     "grc08-cycle-rr",
     "grc08-cycle-rr-ci",
+    "grc08-cycle-rr05",
 );
 
 /// The embedded scene called `name`.
