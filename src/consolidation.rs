@@ -226,10 +226,10 @@ pub fn program_stage(scene: &Scene, pressure: f64) -> Option<usize> {
 
 /// Whether `reproduce` analyses the scene's levels as a consolidation curve (GRC08 §III: the
 /// fit of (9), I(k) along the path): a pressure program reproducing a state whose published
-/// values are a consolidation law ([`paper_law`]). Other states reached by a program are
-/// judged at its end only.
+/// values are a consolidation law, or join one ([`paper_curve`]). Other states reached by a
+/// program are judged at its end only.
 pub fn is_cycle(scene: &Scene, state_key: &str) -> bool {
-    has_program(scene) && paper_law(state_key).is_some()
+    has_program(scene) && paper_curve(state_key).is_some()
 }
 
 /// The levels of the scene's pressure programs, from the run's stage reports (`steps`, as in
@@ -549,6 +549,17 @@ pub fn paper_law(state: &str) -> Option<ConsolidationLaw> {
     })
 }
 
+/// The published law a state's curve is drawn against, with its legend: the state's own fit
+/// (GRC08 T.III), or the type 2 law that a type 1 curve joins (`joins`, GRC08 Fig. 6).
+pub fn paper_curve(state: &str) -> Option<(ConsolidationLaw, String)> {
+    if let Some(law) = paper_law(state) {
+        return Some((law, "GRC08 T.III".into()));
+    }
+    let joined = paper::paper_values(state)?.joins.as_deref()?;
+    let law = paper_law(joined)?;
+    Some((law, "GRC08 T.III, type 2 (Fig. 6: joined)".into()))
+}
+
 /// Φ(P*) of every seed (loading and unloading levels, markers), the seeds' mean with its
 /// s.d. band and its fit by GRC08 (9) when there are several seeds (each seed's fit when there
 /// is one), and the paper's (lines): `consolidation.svg` and `.png` in `out`.
@@ -556,7 +567,7 @@ pub fn plot(
     out: &Path,
     seeds: &[SeedCurve],
     mean: Option<&MeanCurve>,
-    paper: Option<ConsolidationLaw>,
+    paper: Option<(ConsolidationLaw, String)>,
 ) -> Result<Vec<PathBuf>> {
     // (label, points, marks, band) of each curve.
     type Curve = (
@@ -629,14 +640,10 @@ pub fn plot(
             }
         }
     }
-    if let Some(law) = paper {
+    if let Some((law, source)) = paper {
         if p_max > 0.0 {
             owned.push((
-                format!(
-                    "GRC08 T.III, λ = {}, Φmax = {:.4}",
-                    law.lambda,
-                    law.phi_max()
-                ),
+                format!("{source}, λ = {}, Φmax = {:.4}", law.lambda, law.phi_max()),
                 curve(&law, law.p0, p_max),
                 plots::Marks::Lines,
                 None,
@@ -933,7 +940,8 @@ mod tests {
 
     #[test]
     fn every_grc08_cycle_scene_reproduces_a_t3_row() {
-        // GRC08 T.III: μ_R/a = 0, 0.005 and 0.5, each a scene whose levels `reproduce` fits.
+        // GRC08 T.III: μ_R/a = 0, 0.005 and 0.5 from type 2 states, each a scene whose levels
+        // `reproduce` fits; type 1 states (Fig. 6) are drawn against the type 2 law they join.
         let cycles: Vec<_> = grainbench_engine::library::SCENES
             .iter()
             .filter(|(name, _)| name.starts_with("grc08-cycle"))
@@ -945,14 +953,22 @@ mod tests {
             .collect();
         for (scene, state) in cycles.iter().zip(&rows) {
             assert!(is_cycle(scene, state), "{} is not a cycle", scene.name);
-            let law = paper_law(state).unwrap();
-            let phi_max = paper::paper_values(state).unwrap().values["phi_max"].value;
+            let (law, source) = paper_curve(state).unwrap();
+            let joined = paper::paper_values(state).unwrap().joins.as_deref();
+            assert_eq!(source.contains("type 2"), joined.is_some(), "{state}");
+            let row = joined.unwrap_or(state);
+            let phi_max = paper::paper_values(row).unwrap().values["phi_max"].value;
             // Φ_max follows from the row's other parameters (GRC08 (9)) within what λ's last
             // printed digit allows: 0.349 and 0.194, but 0.25 for μ_R/a = 0.5 (0.729 against
             // the printed 0.724).
-            let unit = if state.ends_with("rr05") { 0.01 } else { 0.001 };
+            let unit = if row.ends_with("rr05") { 0.01 } else { 0.001 };
             let slack = 0.5 * unit * (law.p1 / law.p0).ln() * phi_max * phi_max;
             assert!((law.phi_max() - phi_max).abs() < slack, "{state}");
+            // The T.II start (P* = 0.01) is judged as the first level where T.II has the type.
+            assert!(
+                paper::levels_of(state).iter().all(|&(_, p)| p == 0.01),
+                "{state}"
+            );
         }
         rows.sort();
         rows.dedup();
@@ -961,8 +977,16 @@ mod tests {
             [
                 "grc08-consolidation",
                 "grc08-consolidation-rr",
-                "grc08-consolidation-rr05"
+                "grc08-consolidation-rr05",
+                "grc08-consolidation-type1",
+                "grc08-consolidation-type1-rr",
             ]
+        );
+        let t2: Vec<_> = rows.iter().flat_map(|s| paper::levels_of(s)).collect();
+        assert_eq!(
+            t2.len(),
+            4,
+            "T.II: types 1 and 2, with and without RR: {t2:?}"
         );
     }
 

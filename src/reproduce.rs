@@ -230,7 +230,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
     let mut plotted = write_plots(&out, &labels, &analyses, true, mean_ik.as_ref());
     if !curves.is_empty() {
         plotted.push(consolidation::write_csv(&out, &curves)?);
-        let paper = consolidation::paper_law(&state_key);
+        let paper = consolidation::paper_curve(&state_key);
         match consolidation::plot(&out, &curves, mean.as_ref(), paper) {
             Ok(files) => plotted.extend(files),
             Err(e) => eprintln!("warning: no consolidation plot: {e}"),

@@ -86,6 +86,8 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "grc08-cycle-rr",
     "grc08-cycle-rr-ci",
     "grc08-cycle-rr05",
+    "grc08-cycle-type1",
+    "grc08-cycle-type1-rr",
 );
 
 /// The embedded scene called `name`.

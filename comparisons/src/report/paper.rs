@@ -59,6 +59,11 @@ pub struct StateValues {
     /// it is judged on that level's stage-end snapshot.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub level_of: Option<LevelOf>,
+    /// The state whose published consolidation law (GRC08 (9), T.III) this state's curve
+    /// joins once it compacts (GRC08 §III.C.1, Fig. 6: type 1 joins type 2); its plot draws
+    /// that law.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joins: Option<String>,
     /// Metric key (see [`METRIC_KEYS`]) → published value.
     pub values: BTreeMap<String, PaperValue>,
 }
@@ -293,6 +298,30 @@ mod tests {
                 s.paper
             );
         }
+    }
+
+    #[test]
+    fn joined_states_publish_a_whole_law() {
+        let mut joined = 0;
+        for (name, s) in all_states() {
+            let Some(other) = &s.joins else { continue };
+            let law = paper_values(other)
+                .unwrap_or_else(|| panic!("{name} joins {other}: no such state"));
+            for key in ["P0_star", "phi0", "lambda", "alpha", "P1_star"] {
+                assert!(
+                    law.values.contains_key(key),
+                    "{name} joins {other}, which has no {key}"
+                );
+            }
+            // The intrinsic parameters judged on the joining curve are the joined state's.
+            for (key, v) in &s.values {
+                if let Some(w) = law.values.get(key) {
+                    assert_eq!((v.value, v.sd), (w.value, w.sd), "{name}.{key}");
+                }
+            }
+            joined += 1;
+        }
+        assert_eq!(joined, 2, "GRC08 Fig. 6: type 1 with and without RR");
     }
 
     #[test]
