@@ -168,13 +168,18 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         self.size_pair_buffers();
     }
 
+    /// Sizes the per-pair forces and moments to the list, zeroed: a pass may leave a pair
+    /// that was and stays out of reach untouched (the AVX kernel's `flush`).
     fn size_pair_buffers(&mut self) {
         let np = self.nlist.pairs();
+        self.pair_force.clear();
         self.pair_force.resize(np, D::V::zero());
         if L::MOMENTS {
+            self.pair_cross.clear();
             self.pair_cross.resize(np, D::Ang::zero());
         }
         if L::ROLLING {
+            self.pair_roll.clear();
             self.pair_roll.resize(np, D::Ang::zero());
         }
     }

@@ -355,9 +355,15 @@ mod avx {
         sum: &mut ChunkSum,
     ) {
         for &k in &lanes.out[..lanes.empty] {
-            ch.hist[k] = Spring::default();
-            ch.f[k] = V3::zeros();
-            ch.c[k] = V3::zeros();
+            // Only a pair that has just left contact holds a spring, force and moment to
+            // clear: one out of reach before, or new in the list, holds zeros already
+            // (`System::size_pair_buffers`), and most pairs out of reach stay so.
+            let h = &ch.hist[k];
+            if h.kt != 0.0 || h.t != V3::zeros() {
+                ch.hist[k] = Spring::default();
+                ch.f[k] = V3::zeros();
+                ch.c[k] = V3::zeros();
+            }
         }
         lanes.empty = 0;
         let whole = lanes.full - lanes.full % W;
