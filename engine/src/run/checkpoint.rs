@@ -213,6 +213,53 @@ mod tests {
         assert_eq!(std::fs::read(&path).unwrap(), expected);
     }
 
+    /// A header whose step reports hold a damped relaxation (no FIRE) reads back: its `fire`
+    /// field, skipped when empty, shifted every byte after it, and no stage after such a
+    /// relaxation could be resumed (a GRC08 cycle interrupted at P* = 0.178, 2026-12-06).
+    #[test]
+    fn reports_of_every_kind_read_back() {
+        use super::super::relax::Relaxation;
+        use super::super::report::{Checks, StepEnd};
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("checkpoint.bin");
+        let relaxation = Relaxation {
+            start_time: 17.0,
+            damping: 1.0,
+            tangential_zeta: 0.5,
+            pairs: 1419,
+            pairs_gained: 0,
+            pairs_lost: 0,
+            delta_phi: -2e-7,
+            max_displacement: 9.6e-4,
+            free_rollers: 3,
+            fire: None,
+        };
+        let report = |index: usize, relaxation: Option<Relaxation>| StepReport {
+            index,
+            kind: "compress".into(),
+            end: StepEnd::Equilibrium,
+            time: 45.5,
+            steps: 647_800,
+            wall_seconds: 57.4,
+            checks: Checks::default(),
+            peak_strain_rate: 0.004,
+            relaxation,
+            quench: None,
+        };
+        let mut h = header(VERSION);
+        h.reports = vec![
+            report(0, None),
+            report(1, Some(relaxation.clone())),
+            report(2, None),
+        ];
+        Checkpoint::write(&path, &h, &[1u8, 2, 3]).unwrap();
+        let cp = Checkpoint::read(&path).unwrap();
+        assert_eq!(cp.header.reports.len(), 3);
+        assert_eq!(cp.header.reports[1].relaxation, Some(relaxation));
+        assert_eq!(cp.header.reports[2].steps, 647_800);
+        assert_eq!(decode::<[u8; 3]>(&cp.payload).unwrap(), [1, 2, 3]);
+    }
+
     /// Checkpoints of an older version (5: a stage watch without the quench log) are refused
     /// by their version, naming the one this build reads.
     #[test]

@@ -39,7 +39,10 @@ pub struct Relaxation {
     #[serde(default)]
     pub free_rollers: usize,
     /// What FIRE did, when it was the method (`relax.method = "fire"`; damping is then 0).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Always written, `null` otherwise: the step reports travel in checkpoint headers, which
+    /// are bincode and cannot skip a field (skipped, every relaxation without FIRE made the
+    /// checkpoint unreadable).
+    #[serde(default)]
     pub fire: Option<FireStats>,
 }
 
