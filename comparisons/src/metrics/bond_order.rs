@@ -300,6 +300,10 @@ pub struct LocalEnvironments {
     pub hcp: f64,
     /// *dis* for each sample of [`ASTE_MODES`], in its order.
     pub disordered: Vec<(String, f64)>,
+    /// hcp-like grains outside each sample's disordered box, in the same order: the hcp box
+    /// overlaps sample F's disordered one at d_c = 1.2a and 1.3a, and App. D does not say
+    /// which class a grain in both belongs to.
+    pub hcp_beside: Vec<(String, f64)>,
 }
 
 /// AR07 T.VII–T.VIII on a 3D snapshot, for d_c = 1.1a, 1.2a, 1.3a, 1.4a (a the largest
@@ -321,15 +325,24 @@ pub fn local_environments(
     let per_cutoff = (0..4).map(|k| {
         let cutoff = ASTE_MODES[0].1[k].0;
         let q = local_orders(lengths, &pts, cutoff * a);
-        let fraction =
-            |mode: (f64, f64)| q.iter().flatten().filter(|&&x| within(x, mode)).count() as f64 / n;
+        let fraction = |class: &dyn Fn((f64, f64)) -> bool| {
+            q.iter().flatten().filter(|&&x| class(x)).count() as f64 / n
+        };
+        let dis = |modes: &[(f64, f64, f64); 4]| (modes[k].1, modes[k].2);
         LocalEnvironments {
             cutoff,
-            fcc: fraction(FCC_LIKE),
-            hcp: fraction(HCP_LIKE),
+            fcc: fraction(&|x| within(x, FCC_LIKE)),
+            hcp: fraction(&|x| within(x, HCP_LIKE)),
             disordered: ASTE_MODES
                 .iter()
-                .map(|(name, modes)| (name.to_string(), fraction((modes[k].1, modes[k].2))))
+                .map(|(name, modes)| (name.to_string(), fraction(&|x| within(x, dis(modes)))))
+                .collect(),
+            hcp_beside: ASTE_MODES
+                .iter()
+                .map(|(name, modes)| {
+                    let class = |x| within(x, HCP_LIKE) && !within(x, dis(modes));
+                    (name.to_string(), fraction(&class))
+                })
                 .collect(),
         }
     });
@@ -673,6 +686,7 @@ mod tests {
                 let names: Vec<&str> = e.disordered.iter().map(|(s, _)| s.as_str()).collect();
                 assert_eq!(names, ["F", "D", "B"]);
                 assert!(e.disordered.iter().all(|(_, x)| *x == 0.0), "{e:?}");
+                assert!(e.hcp_beside.iter().all(|(_, x)| *x == hcp), "{e:?}");
             }
         }
         let (l, p) = sc();
@@ -685,6 +699,31 @@ mod tests {
             assert_eq!((e.fcc, e.hcp), (0.0, 0.0));
         }
         assert!(local_environments(&[4.0, 4.0], &[vec![0.0, 0.0]], 1.0).is_none());
+    }
+
+    /// The hcp box (0.097, 0.485) ± 0.05 overlaps the disordered box of Aste's sample F at
+    /// d_c = 1.2a and 1.3a only (and sample D's at 1.2a and 1.3a), never sample B's: on the
+    /// committed dense D packing the hcp-like grains outside a box are those of the hcp box less
+    /// some grains there, and all of them where the boxes are disjoint.
+    #[test]
+    fn hcp_like_grains_outside_the_disordered_modes() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../reference-inputs/starts/ar07-D-10kPa-n4000.snap.json"
+        );
+        let s = grainbench_engine::snapshot::Snapshot::read(std::path::Path::new(path)).unwrap();
+        let envs = local_environments(&s.cell.lengths, &s.particles.position, 1.0).unwrap();
+        for e in &envs {
+            let names: Vec<&str> = e.hcp_beside.iter().map(|(s, _)| s.as_str()).collect();
+            assert_eq!(names, ["F", "D", "B"]);
+            for ((_, beside), (_, dis)) in e.hcp_beside.iter().zip(&e.disordered) {
+                assert!(*beside <= e.hcp && e.hcp - beside <= *dis, "{e:?}");
+            }
+            let overlaps = [1.2, 1.3].contains(&e.cutoff);
+            let beside_f = e.hcp_beside[0].1;
+            assert_eq!(beside_f < e.hcp, overlaps, "{e:?}");
+            assert_eq!(e.hcp_beside[2].1, e.hcp, "{e:?}");
+        }
     }
 
     /// Perfect HCP: Q6 = 0.4848, Q4 = 0.0972, local and global. The two stacking sites have

@@ -231,7 +231,8 @@ impl Analysis {
     /// `mean_N`, `Z2`, `Z5_3`, `X1`, `M1`, `M2`, `N_2`, `X1_2`, `M1_2`, `M2_2`, `N_3`, `X1_3`,
     /// `M1_3`, `M2_3`, `Q4`, `Q6`, `Q4loc`, `Q6loc`, `Z_bond`, `Z_cr`, `Q6loc_cr`, `x_cr`,
     /// `n_cr`, `fcc_110`…`fcc_140`, `hcp_110`…`hcp_140`, `dis_F_110`…`dis_F_140` (and `dis_D_…`,
-    /// `dis_B_…`: AR07 T.VII–T.VIII at d_c = 1.1a…1.4a, 3D), `z_plus`, `z_minus`, `z_zero`,
+    /// `dis_B_…`; `hcp_not_F_…`, `hcp_not_D_…`, `hcp_not_B_…`: hcp-like outside that disordered
+    /// box — AR07 T.VII–T.VIII at d_c = 1.1a…1.4a, 3D), `z_plus`, `z_minus`, `z_zero`,
     /// `clusters`, `wrapped_axes`, `N_plus`, `N_plus_rms`, `N_minus`, `N_minus_rms` (GRC07 T.VI,
     /// units of F0), `d_F`, `xi`, `R_w` (GRC07 T.VII and (30), lengths in a), `B`, `G`, `B_V`,
     /// `G_V`, `B_R`, `E95`, `mechanisms`, `H`, `H_over_Nf` (GRC08 §VI, GRC07 App. A; with
@@ -296,6 +297,9 @@ impl Analysis {
             put(&format!("hcp_{dc}"), Some(e.hcp));
             for (sample, x) in &e.disordered {
                 put(&format!("dis_{sample}_{dc}"), Some(*x));
+            }
+            for (sample, x) in &e.hcp_beside {
+                put(&format!("hcp_not_{sample}_{dc}"), Some(*x));
             }
         }
         if let Some(s) = &self.cohesive_split {

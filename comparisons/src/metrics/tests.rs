@@ -461,6 +461,9 @@ fn canonical_keys() -> Vec<String> {
         for sample in ["F", "D", "B"] {
             k.push(format!("dis_{sample}_{dc}"));
         }
+        for sample in ["F", "D", "B"] {
+            k.push(format!("hcp_not_{sample}_{dc}"));
+        }
     }
     k
 }

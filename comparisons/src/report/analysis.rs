@@ -262,12 +262,18 @@ pub fn to_markdown(a: &Analysis) -> String {
             .iter()
             .map(|(sample, x)| format!("{sample} {}", pct(*x)))
             .collect();
+        let beside: Vec<String> = e
+            .hcp_beside
+            .iter()
+            .map(|(sample, x)| format!("{sample} {}", pct(*x)))
+            .collect();
         row(
             &format!("fcc / hcp, d_c = {}a", sig6(e.cutoff)),
             format!("{} / {}", pct(e.fcc), pct(e.hcp)),
             &format!(
-                "AR07 T.VII–T.VIII; disordered modes of Aste et al.'s samples: {}",
-                dis.join(", ")
+                "AR07 T.VII–T.VIII; disordered modes of Aste et al.'s samples: {}; hcp-like outside each: {}",
+                dis.join(", "),
+                beside.join(", ")
             ),
         );
     }
