@@ -303,7 +303,7 @@ pub struct LocalEnvironments {
     /// hcp-like grains outside each sample's disordered box, in the same order: the hcp box
     /// overlaps sample F's disordered one at d_c = 1.2a and 1.3a, and App. D does not say
     /// which class a grain in both belongs to.
-    pub hcp_beside: Vec<(String, f64)>,
+    pub hcp_outside: Vec<(String, f64)>,
 }
 
 /// AR07 T.VII–T.VIII on a 3D snapshot, for d_c = 1.1a, 1.2a, 1.3a, 1.4a (a the largest
@@ -337,7 +337,7 @@ pub fn local_environments(
                 .iter()
                 .map(|(name, modes)| (name.to_string(), fraction(&|x| within(x, dis(modes)))))
                 .collect(),
-            hcp_beside: ASTE_MODES
+            hcp_outside: ASTE_MODES
                 .iter()
                 .map(|(name, modes)| {
                     let class = |x| within(x, HCP_LIKE) && !within(x, dis(modes));
@@ -686,7 +686,7 @@ mod tests {
                 let names: Vec<&str> = e.disordered.iter().map(|(s, _)| s.as_str()).collect();
                 assert_eq!(names, ["F", "D", "B"]);
                 assert!(e.disordered.iter().all(|(_, x)| *x == 0.0), "{e:?}");
-                assert!(e.hcp_beside.iter().all(|(_, x)| *x == hcp), "{e:?}");
+                assert!(e.hcp_outside.iter().all(|(_, x)| *x == hcp), "{e:?}");
             }
         }
         let (l, p) = sc();
@@ -714,15 +714,15 @@ mod tests {
         let s = grainbench_engine::snapshot::Snapshot::read(std::path::Path::new(path)).unwrap();
         let envs = local_environments(&s.cell.lengths, &s.particles.position, 1.0).unwrap();
         for e in &envs {
-            let names: Vec<&str> = e.hcp_beside.iter().map(|(s, _)| s.as_str()).collect();
+            let names: Vec<&str> = e.hcp_outside.iter().map(|(s, _)| s.as_str()).collect();
             assert_eq!(names, ["F", "D", "B"]);
-            for ((_, beside), (_, dis)) in e.hcp_beside.iter().zip(&e.disordered) {
-                assert!(*beside <= e.hcp && e.hcp - beside <= *dis, "{e:?}");
+            for ((_, outside), (_, dis)) in e.hcp_outside.iter().zip(&e.disordered) {
+                assert!(*outside <= e.hcp && e.hcp - outside <= *dis, "{e:?}");
             }
             let overlaps = [1.2, 1.3].contains(&e.cutoff);
-            let beside_f = e.hcp_beside[0].1;
-            assert_eq!(beside_f < e.hcp, overlaps, "{e:?}");
-            assert_eq!(e.hcp_beside[2].1, e.hcp, "{e:?}");
+            let outside_f = e.hcp_outside[0].1;
+            assert_eq!(outside_f < e.hcp, overlaps, "{e:?}");
+            assert_eq!(e.hcp_outside[2].1, e.hcp, "{e:?}");
         }
     }
 

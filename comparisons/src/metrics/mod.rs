@@ -298,7 +298,7 @@ impl Analysis {
             for (sample, x) in &e.disordered {
                 put(&format!("dis_{sample}_{dc}"), Some(*x));
             }
-            for (sample, x) in &e.hcp_beside {
+            for (sample, x) in &e.hcp_outside {
                 put(&format!("hcp_not_{sample}_{dc}"), Some(*x));
             }
         }

@@ -262,8 +262,8 @@ pub fn to_markdown(a: &Analysis) -> String {
             .iter()
             .map(|(sample, x)| format!("{sample} {}", pct(*x)))
             .collect();
-        let beside: Vec<String> = e
-            .hcp_beside
+        let outside: Vec<String> = e
+            .hcp_outside
             .iter()
             .map(|(sample, x)| format!("{sample} {}", pct(*x)))
             .collect();
@@ -273,7 +273,7 @@ pub fn to_markdown(a: &Analysis) -> String {
             &format!(
                 "AR07 T.VII–T.VIII; disordered modes of Aste et al.'s samples: {}; hcp-like outside each: {}",
                 dis.join(", "),
-                beside.join(", ")
+                outside.join(", ")
             ),
         );
     }
