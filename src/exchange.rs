@@ -100,6 +100,7 @@ fn scene_of(ex: &Exchange, particles: &Path) -> Result<Scene> {
             arrangement: Default::default(),
             packing_fraction: solid / ex.cell.lengths.iter().product::<f64>(),
             rms_velocity: 0.0,
+            maxwell: Default::default(),
             snapshot: None,
             particles: Some(std::path::absolute(particles)?),
             grains: None,

@@ -133,8 +133,20 @@ pub fn random_gas<D: Dim>(
     Ok(Gas { s, diameter, l })
 }
 
-/// Maxwell velocities with root-mean-square speed `rms`, zero total momentum.
+/// Maxwell velocities with root-mean-square speed `rms`, zero total momentum: each component
+/// Gaussian with variance ∝ 1/m (one temperature for the mixture).
 pub fn maxwell_velocities<D: Dim>(mass: &[f64], rms: f64, seed: u64) -> Vec<D::V> {
+    maxwell_velocities_spread::<D>(mass, rms, seed, true)
+}
+
+/// As [`maxwell_velocities`]; with `equipartition = false` every grain draws from the same
+/// Gaussian whatever its mass (the mass-weighted mean velocity is still removed).
+pub fn maxwell_velocities_spread<D: Dim>(
+    mass: &[f64],
+    rms: f64,
+    seed: u64,
+    equipartition: bool,
+) -> Vec<D::V> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15);
     let n = mass.len();
     let mut u: Vec<D::V> = (0..n)
@@ -142,7 +154,7 @@ pub fn maxwell_velocities<D: Dim>(mass: &[f64], rms: f64, seed: u64) -> Vec<D::V
             let mut v = D::V::zero();
             for a in 0..D::D {
                 let g: f64 = StandardNormal.sample(&mut rng);
-                v[a] = g / mass[i].sqrt();
+                v[a] = if equipartition { g / mass[i].sqrt() } else { g };
             }
             v
         })
@@ -218,5 +230,29 @@ mod tests {
     fn too_dense_gas_is_refused() {
         let e = random_gas::<D3>(200, 1.0, None, 0.6, 1).err().unwrap();
         assert!(e.contains("initial.packing_fraction"), "{e}");
+    }
+
+    /// Equipartition gives light and heavy grains the same mean kinetic energy; the
+    /// mass-independent draw the same mean v². Both: zero momentum, mean v² = rms².
+    #[test]
+    fn maxwell_spreads_by_mass_or_not() {
+        let n = 20000;
+        let mass: Vec<f64> = (0..n)
+            .map(|i| if i % 2 == 0 { 0.25 } else { 1.0 })
+            .collect();
+        for equi in [true, false] {
+            let u = maxwell_velocities_spread::<D2>(&mass, 0.3, 5, equi);
+            let p = (0..n).fold(<D2 as Dim>::V::zero(), |p, i| p + u[i] * mass[i]);
+            assert!(p.norm() < 1e-9, "{p:?}");
+            let msq = u.iter().map(|v| v.norm_squared()).sum::<f64>() / n as f64;
+            assert!((msq - 0.09).abs() < 1e-12, "{msq}");
+            let mean = |k: usize| {
+                (k..n).step_by(2).map(|i| u[i].norm_squared()).sum::<f64>() / (n / 2) as f64
+            };
+            // v² of the light (m = 1/4) over the heavy (m = 1) grains: 4 or 1.
+            let ratio = mean(0) / mean(1);
+            let want = if equi { 4.0 } else { 1.0 };
+            assert!((ratio / want - 1.0).abs() < 0.05, "{equi}: {ratio}");
+        }
     }
 }

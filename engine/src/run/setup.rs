@@ -8,9 +8,9 @@ use crate::contact::linear::{Linear, NoCohesion};
 use crate::contact::slider::{Frictionless, NoRolling};
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
-use crate::init::{maxwell_velocities, random_gas};
+use crate::init::{maxwell_velocities_spread, random_gas};
 use crate::protocols::lattice;
-use crate::scene::{Arrangement, Law, Scene};
+use crate::scene::{Arrangement, Law, Maxwell, Scene};
 use crate::snapshot::Snapshot;
 use crate::system::System;
 
@@ -69,7 +69,12 @@ pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
     };
     let mass: Vec<f64> = diameter.iter().map(|d| d.powi(D::D as i32)).collect();
     let u = if scene.initial.rms_velocity > 0.0 {
-        maxwell_velocities::<D>(&mass, scene.initial.rms_velocity, scene.seed)
+        maxwell_velocities_spread::<D>(
+            &mass,
+            scene.initial.rms_velocity,
+            scene.seed,
+            scene.initial.maxwell == Maxwell::Equipartition,
+        )
     } else {
         vec![D::V::zero(); n]
     };
@@ -200,4 +205,41 @@ pub fn time_step_for<D: Dim>(scene: &Scene, grains: &Grains<D>, kappa: f64) -> R
         }
     };
     Ok(dt)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::D2;
+
+    /// `initial.maxwell` reaches the draw: mass-independent speeds the largest grains up,
+    /// relative to the smallest, by the ratio of their masses (in mean v²).
+    #[test]
+    fn the_scene_chooses_the_maxwell_spread() {
+        let text = |spread: &str| {
+            format!(
+                "name = \"m\"\ndimension = 2\n[particles]\ncount = 4000\nmin_diameter = 0.5\n\
+                 [law]\nkind = \"linear\"\nkappa = 1e4\nmu = 0.5\nzeta = 0.8\ncohesion = {{ d0 = 1e-3 }}\n\
+                 [initial]\npacking_fraction = 0.2\nrms_velocity = 0.3\n{spread}\n\
+                 [[protocol]]\nkind = \"aggregate\"\nmax_time = 1.0\n"
+            )
+        };
+        // mean v² of the grains with d > 0.9 over those with d < 0.6.
+        let ratio = |spread: &str| {
+            let scene = Scene::from_toml(&text(spread), std::path::Path::new("m.toml")).unwrap();
+            let g = initial_grains::<D2>(&scene).unwrap();
+            let mean = |keep: &dyn Fn(f64) -> bool| {
+                let v: Vec<f64> = (0..g.u.len())
+                    .filter(|&i| keep(g.diameter[i]))
+                    .map(|i| g.u[i].norm_squared())
+                    .collect();
+                v.iter().sum::<f64>() / v.len() as f64
+            };
+            mean(&|d| d > 0.9) / mean(&|d| d < 0.6)
+        };
+        let equi = ratio("");
+        let blind = ratio("maxwell = \"mass-independent\"");
+        assert!(equi < 0.45, "equipartition: heavy grains slower, {equi}");
+        assert!((blind - 1.0).abs() < 0.15, "mass-independent: {blind}");
+    }
 }

@@ -54,6 +54,25 @@ pub enum Arrangement {
     Fcc,
 }
 
+/// How the initial Maxwell velocities depend on grain mass.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Maxwell {
+    /// Each component Gaussian with variance ∝ 1/m: one temperature, equal mean kinetic energy.
+    #[default]
+    Equipartition,
+    /// One Gaussian for every grain, whatever its mass (GRC07 §III.B's "random velocities
+    /// drawn according to a Maxwell distribution, with mean quadratic velocity V0" read as one
+    /// velocity distribution): large grains move faster than under equipartition.
+    MassIndependent,
+}
+
+impl Maxwell {
+    fn is_default(&self) -> bool {
+        *self == Maxwell::Equipartition
+    }
+}
+
 fn default_seed() -> u64 {
     1
 }
@@ -223,6 +242,10 @@ pub struct Initial {
     /// Root-mean-square speed of Maxwell velocities (reduced units); 0 = grains at rest.
     #[serde(default)]
     pub rms_velocity: f64,
+    /// How those velocities depend on mass (`equipartition`, the default, or
+    /// `mass-independent`); either way the mean of v² over the grains is `rms_velocity`².
+    #[serde(default, skip_serializing_if = "Maxwell::is_default")]
+    pub maxwell: Maxwell,
     /// Start instead from the grains of this snapshot (positions, diameters, cell lengths),
     /// at rest; `particles.count` and `dimension` must match it; a relative path is taken from
     /// the working directory (as LAMMPS `read_data`). Used by `grainbench bench
