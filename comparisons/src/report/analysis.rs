@@ -256,24 +256,20 @@ pub fn to_markdown(a: &Analysis) -> String {
             ),
         );
     }
+    let by_sample = |v: &[(String, f64)]| {
+        v.iter()
+            .map(|(sample, x)| format!("{sample} {}", pct(*x)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     for e in a.local_environments.iter().flatten() {
-        let dis: Vec<String> = e
-            .disordered
-            .iter()
-            .map(|(sample, x)| format!("{sample} {}", pct(*x)))
-            .collect();
-        let outside: Vec<String> = e
-            .hcp_outside
-            .iter()
-            .map(|(sample, x)| format!("{sample} {}", pct(*x)))
-            .collect();
         row(
             &format!("fcc / hcp, d_c = {}a", sig6(e.cutoff)),
             format!("{} / {}", pct(e.fcc), pct(e.hcp)),
             &format!(
                 "AR07 T.VII–T.VIII; disordered modes of Aste et al.'s samples: {}; hcp-like outside each: {}",
-                dis.join(", "),
-                outside.join(", ")
+                by_sample(&e.disordered),
+                by_sample(&e.hcp_outside)
             ),
         );
     }
