@@ -69,12 +69,13 @@ pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {
     };
     let mass: Vec<f64> = diameter.iter().map(|d| d.powi(D::D as i32)).collect();
     let u = if scene.initial.rms_velocity > 0.0 {
-        maxwell_velocities_spread::<D>(
-            &mass,
-            scene.initial.rms_velocity,
-            scene.seed,
-            scene.initial.maxwell == Maxwell::Equipartition,
-        )
+        let rms = scene.initial.rms_velocity;
+        let (rms, equipartition) = match scene.initial.maxwell {
+            Maxwell::Equipartition => (rms, true),
+            Maxwell::MassIndependent => (rms, false),
+            Maxwell::PerComponent => (rms * (D::D as f64).sqrt(), false),
+        };
+        maxwell_velocities_spread::<D>(&mass, rms, scene.seed, equipartition)
     } else {
         vec![D::V::zero(); n]
     };
@@ -224,10 +225,13 @@ mod tests {
                  [[protocol]]\nkind = \"aggregate\"\nmax_time = 1.0\n"
             )
         };
+        let grains = |spread: &str| {
+            let scene = Scene::from_toml(&text(spread), std::path::Path::new("m.toml")).unwrap();
+            initial_grains::<D2>(&scene).unwrap()
+        };
         // mean v² of the grains with d > 0.9 over those with d < 0.6.
         let ratio = |spread: &str| {
-            let scene = Scene::from_toml(&text(spread), std::path::Path::new("m.toml")).unwrap();
-            let g = initial_grains::<D2>(&scene).unwrap();
+            let g = grains(spread);
             let mean = |keep: &dyn Fn(f64) -> bool| {
                 let v: Vec<f64> = (0..g.u.len())
                     .filter(|&i| keep(g.diameter[i]))
@@ -241,5 +245,13 @@ mod tests {
         let blind = ratio("maxwell = \"mass-independent\"");
         assert!(equi < 0.45, "equipartition: heavy grains slower, {equi}");
         assert!((blind - 1.0).abs() < 0.15, "mass-independent: {blind}");
+        // Per component: mass-independent, and each of the two components spread by 0.3.
+        let spread = "maxwell = \"per-component\"";
+        assert!((ratio(spread) - 1.0).abs() < 0.15, "per-component");
+        for (kind, want) in [("", 0.09), (spread, 0.18)] {
+            let g = grains(kind);
+            let msq = g.u.iter().map(|v| v.norm_squared()).sum::<f64>() / g.u.len() as f64;
+            assert!((msq / want - 1.0).abs() < 1e-12, "{kind:?}: mean v² {msq}");
+        }
     }
 }

@@ -65,6 +65,10 @@ pub enum Maxwell {
     /// drawn according to a Maxwell distribution, with mean quadratic velocity V0" read as one
     /// velocity distribution): large grains move faster than under equipartition.
     MassIndependent,
+    /// One Gaussian for every grain with `rms_velocity` as the standard deviation of each
+    /// Cartesian component, so the mean of |v|² is d·rms² (V0 read as a per-component spread,
+    /// as `v = V0·(g1, g2)` draws it).
+    PerComponent,
 }
 
 impl Maxwell {
@@ -243,7 +247,8 @@ pub struct Initial {
     #[serde(default)]
     pub rms_velocity: f64,
     /// How those velocities depend on mass (`equipartition`, the default, or
-    /// `mass-independent`); either way the mean of v² over the grains is `rms_velocity`².
+    /// `mass-independent`; either way the mean of v² over the grains is `rms_velocity`²), or
+    /// `per-component` (mass-independent, mean v² = d·`rms_velocity`²).
     #[serde(default, skip_serializing_if = "Maxwell::is_default")]
     pub maxwell: Maxwell,
     /// Start instead from the grains of this snapshot (positions, diameters, cell lengths),
@@ -312,7 +317,7 @@ impl Default for Numerics {
         Numerics {
             dt_fraction: 0.02,
             stiffness_force: 10.0,
-            skin: 0.05,
+            skin: 0.02,
             cell_mass: 1.0,
             cell_mass_per_length: false,
             servo_gain: None,

@@ -489,7 +489,8 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
          read_data data.lammps\n\
          {style}\n\
          {coeff}\n\
-         neighbor 0.2 bin\n\
+         # Verlet skin: the scene's numerics.skin (a), as in our engine.\n\
+         neighbor {skin} bin\n\
          neigh_modify delay 0 every 1 check yes\n\
          fix integ all nve/sphere{disc}\n\
          {e2d}\
@@ -525,6 +526,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         disc = if d3 { "" } else { " disc" },
         e2d = if d3 { "" } else { "fix e2d all enforce2d\n" },
         solid = num(solid),
+        skin = num(start.scene.numerics.skin),
     );
     if let Some(k) = start.trace_steps {
         let _ = writeln!(

@@ -109,11 +109,13 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
          # final.status (equilibrium | time-limit) and final.time (time step).\n"
     );
     let first = &start.stages[0];
+    // Verlet skin: the scene's numerics.skin (a), as in our engine.
     let _ = writeln!(
         s,
         "atom_style granular\natom_modify map array\nboundary p p p\nnewton off\n\
          communicate single vel yes\nunits si\nsoft_particles yes\n\
-         read_data data.liggghts\nneighbor 0.1 bin\nneigh_modify delay 0\n"
+         read_data data.liggghts\nneighbor {} bin\nneigh_modify delay 0\n",
+        num(start.scene.numerics.skin)
     );
     let _ = writeln!(
         s,
