@@ -327,7 +327,7 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
         .with_context(|| format!("reading {}", summary.display()))?;
     // Compared as scenes, so fields added later with defaults do not count as changes.
     let same = serde_json::from_value::<grainbench_engine::Scene>(s["settings"].clone())
-        .is_ok_and(|saved| &saved == scene);
+        .is_ok_and(|saved| saved.same_run(scene));
     let status = s["status"].as_str().unwrap_or("").to_string();
     if !same || status == "interrupted" {
         return Ok(None);

@@ -136,7 +136,7 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
             anyhow::anyhow!("{e}\n(--resume continues a run from {}; there is nothing to resume without it: run without --resume)", cp_path.display())
         })?;
         let saved = cp.scene().map_err(anyhow::Error::msg)?;
-        if &saved != scene {
+        if !saved.same_run(scene) {
             bail!(
                 "the checkpoint {} belongs to scene {:?} with other settings than the scene given; resume with the same scene, or omit the scene and give only --out",
                 cp_path.display(),
