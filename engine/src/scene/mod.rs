@@ -284,7 +284,8 @@ pub struct Numerics {
     /// For Hertz contacts: the normal force, in units of the force scale, at which K_max is
     /// evaluated.
     pub stiffness_force: f64,
-    /// Verlet skin in units of a.
+    /// Verlet skin in units of a: speed only, no bit of a run depends on it (engine/tests/skin.rs);
+    /// the LAMMPS and LIGGGHTS decks get the same.
     pub skin: f64,
     /// Generalized mass of the cell as a fraction of the total grain mass (AR07 §II.B: ~1;
     /// GRC07 §II.A: 3/10).
