@@ -4,8 +4,8 @@
 //! ([`super::hertz_mindlin::HertzMindlin::interact`] behind `System::pair_with`) stays the
 //! reference.
 //!
-//! A scalar range test first sends the listed pairs within reach to the batches (7668 of
-//! 12936 in the `kernels` bench packing), so lanes are not spent on pairs that only clear
+//! A scalar range test first sends the listed pairs within reach to the batches (7668 of 11 298
+//! in the `kernels` bench packing), so lanes are not spent on pairs that only clear
 //! their springs; it tests a block of pairs, without a branch on the outcome, before the
 //! block's batches run. Each lane performs the scalar path's IEEE operations in the same
 //! order (no fused multiply–add, the same divisions), and the virial and largest overlap are
