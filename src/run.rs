@@ -149,13 +149,14 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
     };
     install_stop_handler();
     let stop = &STOP;
+    let threads = rayon::current_num_threads();
     eprintln!(
-        "grainbench {}: scene {} ({}D, N = {}, {} threads) → {}",
+        "grainbench {}: scene {} ({}D, N = {}, {threads} thread{}) → {}",
         env!("CARGO_PKG_VERSION"),
         scene.name,
         scene.dimension,
         scene.particles.count,
-        rayon::current_num_threads(),
+        if threads == 1 { "" } else { "s" },
         out.display()
     );
     let warnings = scene.warnings();
