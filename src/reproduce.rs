@@ -36,6 +36,9 @@ struct SeedRun {
     /// Contacts at their Coulomb or rolling threshold at the end (GRC07 §II.D: none at
     /// equilibrium); `None` for summaries written before it was recorded.
     contacts_at_threshold: Option<usize>,
+    /// Of those, the contacts whose threshold (μN, μ_r N) is below the equilibrium tolerance;
+    /// `None` for summaries written before it was recorded.
+    below_tolerance: Option<usize>,
 }
 
 /// The states `reproduce` knows for `paper`: embedded scenes named `<paper>-<state>` with
@@ -139,7 +142,8 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             wall_seconds: o.wall_seconds,
             steps: serde_json::to_value(&o.steps)?,
             threads: rayon::current_num_threads(),
-            contacts_at_threshold: Some(o.contacts_at_threshold),
+            contacts_at_threshold: Some(o.contacts_at_threshold.all),
+            below_tolerance: Some(o.contacts_at_threshold.below_tolerance),
             snapshot: o.snapshot,
         });
     }
@@ -341,6 +345,9 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
         steps: s["steps"].clone(),
         threads: s["threads"].as_u64().unwrap_or(0) as usize,
         contacts_at_threshold: s["contacts_at_threshold"].as_u64().map(|c| c as usize),
+        below_tolerance: s["contacts_at_threshold_below_tolerance"]
+            .as_u64()
+            .map(|c| c as usize),
     }))
 }
 
@@ -482,6 +489,7 @@ fn record(
             "wall_seconds": r.wall_seconds,
             "threads": r.threads,
             "contacts_at_threshold": r.contacts_at_threshold,
+            "contacts_at_threshold_below_tolerance": r.below_tolerance,
             "stages": r.steps,
             "metrics": v.iter().cloned().collect::<std::collections::BTreeMap<String, f64>>(),
         })).collect::<Vec<_>>(),
@@ -543,6 +551,7 @@ mod tests {
             steps: serde_json::Value::Null,
             threads: 1,
             contacts_at_threshold: Some(0),
+            below_tolerance: Some(0),
         }
     }
 

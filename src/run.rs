@@ -376,7 +376,8 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
         "threads": rayon::current_num_threads(),
         "wall_seconds": outcome.wall_seconds,
         "neighbor_builds": outcome.neighbor_builds,
-        "contacts_at_threshold": outcome.contacts_at_threshold,
+        "contacts_at_threshold": outcome.contacts_at_threshold.all,
+        "contacts_at_threshold_below_tolerance": outcome.contacts_at_threshold.below_tolerance,
         "status": outcome.snapshot.status,
         "steps": outcome.steps,
         "snapshot": snap_path,
@@ -463,10 +464,17 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
             }
         }
     }
-    if outcome.contacts_at_threshold > 0 {
+    let at = outcome.contacts_at_threshold;
+    if at.loaded() > 0 {
         println!(
-            "warning    {} contacts sit at their Coulomb or rolling threshold (GRC07 §II.D expects none at equilibrium)",
-            outcome.contacts_at_threshold
+            "warning    {} force-carrying contacts sit at their Coulomb or rolling threshold (GRC07 §II.D expects none at equilibrium)",
+            at.loaded()
+        );
+    }
+    if at.below_tolerance > 0 {
+        println!(
+            "note       {} contacts sit at a threshold (μN or μ_r N) below the equilibrium tolerance, which cannot tell them from contacts inside it",
+            at.below_tolerance
         );
     }
     if flags.report {

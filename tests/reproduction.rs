@@ -154,7 +154,14 @@ fn ar07_d_ci_lands_in_its_bands() {
 
 #[test]
 fn grc07_cohesionless_ci_lands_in_its_bands() {
-    check_ci_scene("grc07-cohesionless-phi036-mu05-ci");
+    let summary = check_ci_scene("grc07-cohesionless-phi036-mu05-ci");
+    // GRC07 §II.D: no contact at its Coulomb threshold, but for those (seed 1: 3, rattlers
+    // touching the backbone) whose threshold μN is below the force tolerance.
+    let at = summary["contacts_at_threshold"].as_u64().unwrap();
+    let ignored = summary["contacts_at_threshold_below_tolerance"]
+        .as_u64()
+        .unwrap();
+    assert_eq!(at, ignored, "{summary}");
 }
 
 /// GRC07 type 1 with cohesion and RR, N = 400: ends at equilibrium (through the final

@@ -285,20 +285,131 @@ pub(super) fn measure<D: Dim, L: ContactLaw<D>>(
 }
 
 /// Contacts whose tangential force or rolling moment sits at its threshold.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AtThreshold {
+    /// Every such contact.
+    pub all: usize,
+    /// Those whose threshold itself, μN^e (or μ_r N^e for the rolling moment), is below the
+    /// equilibrium tolerance on the net force (moment): at that accuracy the contact cannot be
+    /// told from one strictly inside its cone (GRC07 §III.A likewise ignores contacts whose
+    /// forces are below the tolerance). GRC07 §II.D's strict inequalities concern the rest.
+    pub below_tolerance: usize,
+}
+
+impl AtThreshold {
+    /// Contacts at a threshold larger than the equilibrium tolerance.
+    pub fn loaded(&self) -> usize {
+        self.all - self.below_tolerance
+    }
+}
+
+/// Contacts whose tangential force or rolling moment sits at its threshold.
 pub(super) fn contacts_at_threshold<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
     num: &StageNumerics,
-) -> usize {
+) -> AtThreshold {
     let (mu, mu_r) = (num.mu.value(), num.mu_r);
-    let mut count = 0;
+    let (force_tolerance, moment_tolerance) = (num.force * num.f_ref, num.moment * num.f_ref);
+    let mut count = AtThreshold::default();
     sys.for_each_interaction(|c| {
-        let at = c.gap < 0.0
-            && ((mu.is_finite()
-                && mu > 0.0
-                && c.tangential.norm() >= mu * c.normal_elastic * (1.0 - 1e-9))
-                || (mu_r.is_finite()
-                    && c.rolling.norm() >= mu_r * c.normal_elastic * (1.0 - 1e-9)));
-        count += usize::from(at);
+        if c.gap >= 0.0 {
+            return;
+        }
+        let ne = c.normal_elastic;
+        let sliding = mu.is_finite() && mu > 0.0 && c.tangential.norm() >= mu * ne * (1.0 - 1e-9);
+        let rolling = mu_r.is_finite() && c.rolling.norm() >= mu_r * ne * (1.0 - 1e-9);
+        if sliding || rolling {
+            count.all += 1;
+            let unresolved = (!sliding || mu * ne < force_tolerance)
+                && (!rolling || mu_r * ne < moment_tolerance);
+            count.below_tolerance += usize::from(unresolved);
+        }
     });
     count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cell::Cell;
+    use crate::contact::linear::{Linear, NoCohesion};
+    use crate::contact::slider::{Coulomb, NoRolling};
+    use crate::geometry::D2;
+    use crate::scene::{Mu, Scene};
+    use nalgebra::Vector2;
+    use std::path::Path;
+
+    type Law = Linear<NoCohesion, Coulomb, NoRolling>;
+
+    /// Two unit disks overlapping by 1e-3 (N = K_N h = 1) along x; `slide` gives them
+    /// opposite velocities along y, which takes the tangential spring to its Coulomb cap.
+    fn pair(slide: bool) -> System<D2, Law> {
+        let law = Linear {
+            kn: 1000.0,
+            kt: 1000.0,
+            zeta: 0.0,
+            zeta_t: 0.0,
+            cohesion: NoCohesion,
+            friction: Coulomb { mu: 0.5 },
+            rolling: NoRolling,
+        };
+        let side = 10.0;
+        let s = vec![
+            Vector2::new(0.5 - 0.4995 / side, 0.5),
+            Vector2::new(0.5 + 0.4995 / side, 0.5),
+        ];
+        let mut sys = System::new(
+            law,
+            Cell::new(Vector2::new(side, side), 1.0),
+            s,
+            &[1.0, 1.0],
+            0.1,
+        );
+        sys.dt = 1e-4;
+        if slide {
+            sys.u[0] = Vector2::new(0.0, -1.0);
+            sys.u[1] = Vector2::new(0.0, 1.0);
+        }
+        sys.init_forces();
+        for _ in 0..5 {
+            sys.step();
+        }
+        sys
+    }
+
+    fn numerics(force_tolerance: f64) -> StageNumerics {
+        let text =
+            include_str!("../../../reference-inputs/scenes/grc07-cohesionless-phi036-mu05-ci.toml");
+        let scene = Scene::from_toml(text, Path::new("s.toml")).unwrap();
+        StageNumerics {
+            mu: Mu::Finite(0.5),
+            mu_r: f64::INFINITY,
+            force: force_tolerance,
+            f_ref: 1.0,
+            ..StageNumerics::of_scene(&scene)
+        }
+    }
+
+    /// GRC07 §II.D asks for strict Coulomb inequalities; a sliding contact whose Coulomb
+    /// bound μN is below the force tolerance is counted apart.
+    #[test]
+    fn contacts_at_threshold_are_split_by_the_force_tolerance() {
+        let sliding = pair(true);
+        let mut n = 0.0;
+        sliding.for_each_interaction(|c| n = c.normal_elastic);
+        assert!((n - 1.0).abs() < 0.01, "N = {n}");
+        let loaded = contacts_at_threshold(&sliding, &numerics(1e-4));
+        assert_eq!(
+            (loaded.all, loaded.below_tolerance, loaded.loaded()),
+            (1, 0, 1)
+        );
+        let ignored = contacts_at_threshold(&sliding, &numerics(2.0));
+        assert_eq!(
+            (ignored.all, ignored.below_tolerance, ignored.loaded()),
+            (1, 1, 0)
+        );
+        // At rest the contact is inside the cone.
+        let resting = contacts_at_threshold(&pair(false), &numerics(1e-4));
+        assert_eq!(resting, AtThreshold::default());
+    }
 }

@@ -141,9 +141,9 @@ pub struct Outcome {
     pub law: String,
     pub wall_seconds: f64,
     pub neighbor_builds: u64,
-    /// Contacts at the Coulomb or rolling threshold at the end (should be 0 at equilibrium:
-    /// GRC07 §II.D, the thresholds hold as strict inequalities).
-    pub contacts_at_threshold: usize,
+    /// Contacts at the Coulomb or rolling threshold at the end (GRC07 §II.D: none at
+    /// equilibrium, the thresholds hold as strict inequalities).
+    pub contacts_at_threshold: super::checks::AtThreshold,
 }
 
 impl Outcome {

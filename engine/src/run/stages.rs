@@ -61,7 +61,7 @@ pub(super) struct Ctx<'s, D: Dim> {
     pub(super) dt: f64,
     pub(super) k_max: f64,
     pub(super) law: String,
-    pub(super) at_threshold: usize,
+    pub(super) at_threshold: super::checks::AtThreshold,
 }
 
 impl<'s, D: Dim> Ctx<'s, D> {
@@ -88,7 +88,7 @@ impl<'s, D: Dim> Ctx<'s, D> {
             dt: 0.0,
             k_max: 0.0,
             law: String::new(),
-            at_threshold: 0,
+            at_threshold: Default::default(),
         }
     }
 
@@ -247,7 +247,7 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     scene: &Scene,
     sys: &mut System<D, L>,
     opts: &mut RunOptions,
-) -> Result<(Vec<StepReport>, Snapshot, usize), RunError> {
+) -> Result<(Vec<StepReport>, Snapshot, super::checks::AtThreshold), RunError> {
     sys.init_forces();
     let mut ctx = Ctx::<D>::new(scene);
     let n = ctx.stages.len();
@@ -259,7 +259,10 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     };
     let num = StageNumerics::of_scene(scene);
     let snap = snapshot_of(sys, &scene.name, &num, status, ctx.pressure);
-    Ok((ctx.reports, snap, contacts_at_threshold(sys, &num)))
+    let last = ctx.stages.last().map_or(num, |(_, step)| {
+        StageNumerics::of_stage(scene, step, ctx.pressure)
+    });
+    Ok((ctx.reports, snap, contacts_at_threshold(sys, &last)))
 }
 
 /// The stages `range` on one system; returns whether the run was stopped.
