@@ -218,7 +218,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         )
     };
     let level_tables = level_tables(&base, &state_key, &runs, &out)?;
-    let mut markdown = table.to_markdown();
+    let mut markdown = format!("{}{}", table.to_markdown(), seed_summary(&runs));
     for t in step_table.iter().chain(&level_tables) {
         markdown = format!("{markdown}\n{}", t.to_markdown());
     }
@@ -314,6 +314,26 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         }
     }
     Ok(0)
+}
+
+/// How each seed ended, with its contacts at a Coulomb or rolling threshold (GRC07 §II.D: none
+/// at equilibrium; those whose threshold is below the equilibrium tolerance counted apart).
+fn seed_summary(runs: &[SeedRun]) -> String {
+    let seeds: Vec<String> = runs
+        .iter()
+        .map(|r| {
+            let at = match (r.contacts_at_threshold, r.below_tolerance) {
+                (Some(0), _) => ", no contact at a threshold".to_string(),
+                (Some(n), Some(b)) => format!(
+                    ", {n} contact(s) at a threshold ({b} with the threshold below the tolerance)"
+                ),
+                (Some(n), None) => format!(", {n} contact(s) at a threshold"),
+                (None, _) => String::new(),
+            };
+            format!("{} ({}{at})", r.seed, r.status)
+        })
+        .collect();
+    format!("\nSeeds: {}.\n", seeds.join("; "))
 }
 
 /// Where `reproduce` runs seed `seed` of a state whose output folder is `out`.

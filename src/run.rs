@@ -467,7 +467,7 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
     let at = outcome.contacts_at_threshold;
     if at.loaded() > 0 {
         println!(
-            "warning    {} force-carrying contacts sit at their Coulomb or rolling threshold (GRC07 §II.D expects none at equilibrium)",
+            "warning    {} contacts sit at a Coulomb or rolling threshold above the equilibrium tolerance (GRC07 §II.D expects none at equilibrium)",
             at.loaded()
         );
     }

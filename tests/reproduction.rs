@@ -154,7 +154,7 @@ fn ar07_d_ci_lands_in_its_bands() {
 
 #[test]
 fn grc07_cohesionless_ci_lands_in_its_bands() {
-    let summary = check_ci_scene("grc07-cohesionless-phi036-mu05-ci");
+    let (summary, dir) = check_ci_scene_in("grc07-cohesionless-phi036-mu05-ci");
     // GRC07 §II.D: no contact at its Coulomb threshold, but for those (seed 1: 3, rattlers
     // touching the backbone) whose threshold μN is below the force tolerance.
     let at = summary["contacts_at_threshold"].as_u64().unwrap();
@@ -162,6 +162,12 @@ fn grc07_cohesionless_ci_lands_in_its_bands() {
         .as_u64()
         .unwrap();
     assert_eq!(at, ignored, "{summary}");
+    // The report says how each seed ended.
+    let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    let line = format!(
+        "Seeds: 1 (equilibrium, {at} contact(s) at a threshold ({at} with the threshold below the tolerance))."
+    );
+    assert!(at > 0 && report.contains(&line), "{report}");
 }
 
 /// GRC07 type 1 with cohesion and RR, N = 400: ends at equilibrium (through the final
