@@ -271,11 +271,7 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
         run_stages(ctx, &mut sys, range, resume_at, opts)
     }?;
     ctx.neighbor_builds += sys.nlist.builds - builds0;
-    // Judged with the last stage's force tolerance (its pressure and preset).
-    let last = ctx.stages.last().map_or(num, |(_, step)| {
-        StageNumerics::of_stage(scene, step, ctx.pressure)
-    });
-    ctx.at_threshold = contacts_at_threshold(&sys, &last);
+    ctx.at_threshold = contacts_at_threshold(&sys, &ctx.last_numerics());
     let status = if stopped {
         "interrupted"
     } else if ctx.reports.iter().all(|r| r.end.ok()) {

@@ -92,6 +92,15 @@ impl<'s, D: Dim> Ctx<'s, D> {
         }
     }
 
+    /// The numerics of the last stage: its pressure and preset set the force tolerance that
+    /// judges the contacts at a threshold at the end of the run.
+    pub(super) fn last_numerics(&self) -> StageNumerics {
+        self.stages.last().map_or_else(
+            || StageNumerics::of_scene(self.scene),
+            |(_, step)| StageNumerics::of_stage(self.scene, step, self.pressure),
+        )
+    }
+
     pub(super) fn header(
         &self,
         stage: usize,
@@ -259,10 +268,8 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     };
     let num = StageNumerics::of_scene(scene);
     let snap = snapshot_of(sys, &scene.name, &num, status, ctx.pressure);
-    let last = ctx.stages.last().map_or(num, |(_, step)| {
-        StageNumerics::of_stage(scene, step, ctx.pressure)
-    });
-    Ok((ctx.reports, snap, contacts_at_threshold(sys, &last)))
+    let at_threshold = contacts_at_threshold(sys, &ctx.last_numerics());
+    Ok((ctx.reports, snap, at_threshold))
 }
 
 /// The stages `range` on one system; returns whether the run was stopped.
