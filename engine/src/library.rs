@@ -22,6 +22,7 @@ pub const SCENES: &[(&str, &str)] = scenes!(
     "ar07-A-n1372",
     "ar07-D-10kPa-n1372",
     "ar07-D-10kPa-n1372-quench",
+    "ar07-D-10kPa-n1372-relax",
     "ar07-A",
     "ar07-A-ci",
     "ar07-Aprime",

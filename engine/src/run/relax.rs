@@ -397,6 +397,23 @@ mod tests {
         assert!(st.damping_on());
     }
 
+    /// `settle_time = 0` (the frictional D's relaxation, whose rattlers change the list at
+    /// every check): the first check at rest switches, whatever the list did.
+    #[test]
+    fn without_settle_time_the_first_check_at_rest_switches() {
+        let s = vec![Vector2::new(0.1, 0.2), Vector2::new(0.5, 0.5)];
+        let mut st = StageWatch::<D2>::new(
+            Some(Relax {
+                settle_time: 0.0,
+                ..relax()
+            }),
+            0.0,
+        );
+        assert!(!st.observe_structure(0.5, settling(false), &mut [(0, 1)], 0.5, &s));
+        assert!(st.observe_structure(0.6, settling(true), &mut [(1, 2)], 0.5, &s));
+        assert!(st.damping_on());
+    }
+
     /// A cell ringing about its target (±300 criteria, never within one at a check) with the
     /// list and the kinetic energy settled: the instantaneous test never switches, the mean
     /// over `settle_time` does, once the mean is within the criterion; a ringing off target

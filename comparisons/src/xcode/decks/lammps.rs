@@ -710,10 +710,11 @@ fn quenched_stage(s: &mut String, st: &super::Stage, k: usize, rebase: &str) {
 /// say it. Phase A runs the law as it is in chunks of `settle_time` and switches when, at the end
 /// of a chunk, the number of contacts (`compute contact/atom`: touching pairs, not the list) is
 /// the one at the end of the previous chunk and the kinetic (without one-contact grains with
-/// `free_rollers`) and stress criteria hold to `settle_factor`. Phase B damps the velocities with `fix langevin` at
-/// T = 0 (drag −m v γ; spins at LAMMPS's rotational rate) and adds the tangential dashpot, until
-/// the criteria hold over the window: runs stopped by `fix halt` when they first hold, then a
-/// window-long run stopped when they break.
+/// `free_rollers`) and stress criteria hold to `settle_factor`; with `settle_time = 0`, one run
+/// stopped by `fix halt` at the first check where they hold. Phase B damps the velocities with
+/// `fix langevin` at T = 0 (drag −m v γ; spins at LAMMPS's rotational rate) and adds the
+/// tangential dashpot, until the criteria hold over the window: runs stopped by `fix halt` when
+/// they first hold, then a window-long run stopped when they break (none without a window).
 fn relaxed_stage(
     s: &mut String,
     start: &Start,
@@ -744,13 +745,58 @@ fn relaxed_stage(
     } else {
         "v_ek"
     };
+    // With settle_time = 0 our switch asks nothing of the list (it has been unchanged for
+    // zero time at any check): the first check at rest switches, so one run stopped by
+    // `fix halt` replaces the chunks (and their per-run set-up).
+    let (phase_a, how) = if relax.settle_time > 0.0 {
+        (
+            format!(
+                "label settle{k}\n\
+                 {rebase}run {settle}\n\
+                 if \"${{ncnt{k}}} == ${{nprev{k}}} && ${{rest{k}}} > 0.5\" then \"jump SELF damp{k}\"\n\
+                 variable nprev{k} equal ${{ncnt{k}}}\n\
+                 if \"$(step) < ${{end{k}}}\" then \"jump SELF settle{k}\"\n"
+            ),
+            format!(
+                "in chunks of settle_time ({settle} steps), until the contact count is unchanged over a chunk and"
+            ),
+        )
+    } else {
+        (
+            format!(
+                "fix halt all halt {every} v_rest{k} > 0.5 error continue\n\
+                 {rebase}run ${{end{k}}} upto\n\
+                 unfix halt\n\
+                 if \"${{rest{k}}} > 0.5\" then \"jump SELF damp{k}\"\n"
+            ),
+            "stopped by fix halt at the first check where".to_string(),
+        )
+    };
+    // The criteria must then hold over the window; with none (AR07 presets) the first check
+    // where they hold ends the stage, as ours.
+    let hold = if st.window > 0.0 {
+        format!(
+            "fix halt all halt {every} v_ok{k} < 0.5 error continue\n\
+             {rebase}run {window}\n\
+             unfix halt\n\
+             if \"${{ok{k}}} > 0.5\" then \"variable status string equilibrium\" \"jump SELF undamp{k}\"\n\
+             jump SELF hold{k}\n"
+        )
+    } else {
+        "variable status string equilibrium\n".to_string()
+    };
+    let over = if st.window > 0.0 {
+        format!(" over the window ({window} steps)")
+    } else {
+        String::new()
+    };
     let damped = pair_coeff(start, st.kappa, st.mu, code, relax.tangential_zeta);
     let plain = pair_coeff(start, st.kappa, st.mu, code, 0.0);
     let _ = write!(
         s,
         "# Final relaxation (relax = {{ damping = {gamma}, tangential_zeta = {zt}, settle_time = {st_time}, free_rollers = {fr}, settle_factor = {sf} }}).\n\
-         # Phase A: the law as it is, in chunks of settle_time ({settle} steps), until the contact count is\n\
-         # unchanged over a chunk with the kinetic{fr_note} and stress criteria met (to settle_factor).\n\
+         # Phase A: the law as it is, {how}\n\
+         # the kinetic{fr_note} and stress criteria are met (to settle_factor).\n\
          variable end{k} equal $(step+{max})\n\
          compute ncs{k} all reduce sum c_cn\n\
          variable ncnt{k} equal c_ncs{k}\n\
@@ -761,15 +807,11 @@ fn relaxed_stage(
          thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k} v_ncnt{k} v_rest{k}\n\
          thermo_modify norm no flush yes\n\
          thermo {every}\n\
-         label settle{k}\n\
-         {rebase}run {settle}\n\
-         if \"${{ncnt{k}}} == ${{nprev{k}}} && ${{rest{k}}} > 0.5\" then \"jump SELF damp{k}\"\n\
-         variable nprev{k} equal ${{ncnt{k}}}\n\
-         if \"$(step) < ${{end{k}}}\" then \"jump SELF settle{k}\"\n\
+         {phase_a}\
          variable status string time-limit\n\
          jump SELF done{k}\n\
          # Phase B: drag -m v gamma on every grain (fix langevin at T = 0) and the tangential dashpot,\n\
-         # until the criteria hold over the window ({window} steps).\n\
+         # until the criteria hold{over}.\n\
          label damp{k}\n\
          print \"grainbench: damping on at step $(step), time $(time)\"\n\
          fix relax{k} all langevin 0.0 0.0 {damp} 1 omega yes\n\
@@ -780,11 +822,7 @@ fn relaxed_stage(
          {rebase}run ${{end{k}}} upto\n\
          unfix halt\n\
          if \"${{ok{k}}} < 0.5\" then \"variable status string time-limit\" \"jump SELF undamp{k}\"\n\
-         fix halt all halt {every} v_ok{k} < 0.5 error continue\n\
-         {rebase}run {window}\n\
-         unfix halt\n\
-         if \"${{ok{k}}} > 0.5\" then \"variable status string equilibrium\" \"jump SELF undamp{k}\"\n\
-         jump SELF hold{k}\n\
+         {hold}\
          label undamp{k}\n\
          unfix relax{k}\n\
          {plain}\n\
@@ -798,6 +836,7 @@ fn relaxed_stage(
         max = st.max_steps,
         rest = rest.join("*"),
         damp = num(1.0 / relax.damping),
+
     );
 }
 
@@ -886,6 +925,24 @@ mod tests {
             [super::super::Feature::AdhesionContinuousSizes]
         );
         assert!(refusal.to_string().contains("particles.classes"));
+    }
+
+    /// A relaxation with `settle_time = 0` switches at the first check at rest, as ours does
+    /// (the list has been unchanged for zero time at any check); with a settle time the
+    /// contact count must also hold over a chunk.
+    #[test]
+    fn relaxation_without_settle_time_switches_on_rest_alone() {
+        let start = library_start("ar07-D-10kPa-n1372-relax");
+        let input = &super::super::deck(&start, Code::Lammps).unwrap().files[0].1;
+        assert!(input.contains(
+            "fix halt all halt 200 v_rest1 > 0.5 error continue\nrun ${end1} upto\nunfix halt\nif \"${rest1} > 0.5\" then \"jump SELF damp1\""
+        ));
+        assert!(!input.contains("label settle1"));
+        assert!(input.contains("fix relax1 all langevin 0.0 0.0 3.3333333333333335 1 omega yes"));
+        assert!(!input.contains("${ncnt1} == ${nprev1}"));
+        let start = library_start("xcode-cohesive-smoke");
+        let input = &super::super::deck(&start, Code::Lammps2025).unwrap().files[0].1;
+        assert!(input.contains("if \"${ncnt1} == ${nprev1} && ${rest1} > 0.5\" then"));
     }
 
     /// LAMMPS 2021, diameters in classes: one atom type per class, one table per type pair
