@@ -836,7 +836,6 @@ fn relaxed_stage(
         max = st.max_steps,
         rest = rest.join("*"),
         damp = num(1.0 / relax.damping),
-
     );
 }
 
