@@ -751,7 +751,8 @@ fn relaxed_stage(
     let (phase_a, how) = if relax.settle_time > 0.0 {
         (
             format!(
-                "label settle{k}\n\
+                "variable nprev{k} equal -1\n\
+                 label settle{k}\n\
                  {rebase}run {settle}\n\
                  if \"${{ncnt{k}}} == ${{nprev{k}}} && ${{rest{k}}} > 0.5\" then \"jump SELF damp{k}\"\n\
                  variable nprev{k} equal ${{ncnt{k}}}\n\
@@ -774,21 +775,22 @@ fn relaxed_stage(
     };
     // The criteria must then hold over the window; with none (AR07 presets) the first check
     // where they hold ends the stage, as ours.
-    let hold = if st.window > 0.0 {
-        format!(
-            "fix halt all halt {every} v_ok{k} < 0.5 error continue\n\
-             {rebase}run {window}\n\
-             unfix halt\n\
-             if \"${{ok{k}}} > 0.5\" then \"variable status string equilibrium\" \"jump SELF undamp{k}\"\n\
-             jump SELF hold{k}\n"
+    let (hold, over) = if st.window > 0.0 {
+        (
+            format!(
+                "fix halt all halt {every} v_ok{k} < 0.5 error continue\n\
+                 {rebase}run {window}\n\
+                 unfix halt\n\
+                 if \"${{ok{k}}} > 0.5\" then \"variable status string equilibrium\" \"jump SELF undamp{k}\"\n\
+                 jump SELF hold{k}\n"
+            ),
+            format!(" over the window ({window} steps)"),
         )
     } else {
-        "variable status string equilibrium\n".to_string()
-    };
-    let over = if st.window > 0.0 {
-        format!(" over the window ({window} steps)")
-    } else {
-        String::new()
+        (
+            "variable status string equilibrium\n".to_string(),
+            String::new(),
+        )
     };
     let damped = pair_coeff(start, st.kappa, st.mu, code, relax.tangential_zeta);
     let plain = pair_coeff(start, st.kappa, st.mu, code, 0.0);
@@ -803,7 +805,6 @@ fn relaxed_stage(
          variable eks{k} atom {settling_ek}\n\
          compute eks{k} all reduce sum v_eks{k}\n\
          variable rest{k} equal {rest}\n\
-         variable nprev{k} equal -1\n\
          thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k} v_ncnt{k} v_rest{k}\n\
          thermo_modify norm no flush yes\n\
          thermo {every}\n\
