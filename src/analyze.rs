@@ -119,9 +119,12 @@ pub struct Extra<'a> {
     pub scene: Option<&'a str>,
     /// Directory for the ParaView files of the snapshot.
     pub vtk: Option<&'a Path>,
+    /// Cohesive snapshots: the tolerance of GRC07 T.VI's split, in F0 (default 1e-4).
+    pub cohesive_tolerance: Option<f64>,
 }
 
-/// `grainbench analyze SNAPSHOT [--from CODE] [--write FILE] [--json] [--moduli [--scene S]] [--vtk DIR]`.
+/// `grainbench analyze SNAPSHOT [--from CODE] [--write FILE] [--json] [--moduli [--scene S]] [--vtk DIR]
+/// [--cohesive-tolerance F]`.
 pub fn analyze(
     path: &Path,
     json: bool,
@@ -130,6 +133,11 @@ pub fn analyze(
     write: Option<&Path>,
     extra: &Extra,
 ) -> Result<i32> {
+    if let Some(t) = extra.cohesive_tolerance {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--cohesive-tolerance {t}: a force in F0 above zero (GRC07 T.VI: 1e-4)");
+        }
+    }
     if from.is_none() && dump.given() {
         bail!("--dimension, --mu, --pressure, --force-unit and --cohesive describe another code's dumps: add --from lammps|liggghts|yade");
     }
@@ -156,6 +164,15 @@ pub fn analyze(
         snap.write(w)?;
     }
     let mut opts = Options::default();
+    if let Some(t) = extra.cohesive_tolerance {
+        if !snap.cohesive {
+            bail!(
+                "--cohesive-tolerance sets GRC07 T.VI's split of a cohesive packing; {} is cohesionless (its force threshold is relative to ⟨|N|⟩)",
+                path.display()
+            );
+        }
+        opts.cohesive_tolerance = t;
+    }
     if extra.moduli {
         opts.moduli = Some(stiffness_of(&snap, extra.scene)?);
     } else if extra.scene.is_some() {

@@ -131,6 +131,11 @@ enum Command {
         /// force) and snapshot.pvd grouping them.
         #[arg(long, value_name = "DIR")]
         vtk: Option<PathBuf>,
+        /// Cohesive snapshots: the normal force, in F0, at or below which an interaction counts
+        /// as unstressed in GRC07 T.VI's split z = z+ + z− + z0 (default 1e-4, T.VI's
+        /// tolerance; GRC07 §IV.C separates loops with RR at 1e-2).
+        #[arg(long, value_name = "F")]
+        cohesive_tolerance: Option<f64>,
     },
     /// List the embedded scenes.
     Scenes,
@@ -406,6 +411,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
             moduli,
             scene,
             vtk,
+            cohesive_tolerance,
         } => analyze::analyze(
             &snapshot,
             json,
@@ -422,6 +428,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
                 moduli,
                 scene: scene.as_deref(),
                 vtk: vtk.as_deref(),
+                cohesive_tolerance,
             },
         ),
         Command::Reproduce {

@@ -114,6 +114,13 @@ fn bad_scene_names_file_and_field_and_leaves_results_untouched() {
         .code(2)
         .stderr(predicate::str::contains("initial.packing_fraction"));
 
+    grainbench()
+        .args(["analyze", "--cohesive-tolerance", "0"])
+        .arg(&snap)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--cohesive-tolerance 0"));
+
     let not_snap = scene_file(dir.path(), "x.json", "{\"format\": \"other\"}");
     grainbench()
         .arg("analyze")
@@ -146,6 +153,13 @@ fn same_seed_gives_identical_results_for_one_and_two_threads() {
             .success();
         files.push(std::fs::read(out.join("final.snap.json")).unwrap());
     }
+    // GRC07 T.VI's split has no meaning for a cohesionless packing.
+    grainbench()
+        .args(["analyze", "--cohesive-tolerance", "1e-2"])
+        .arg(dir.path().join("t1/final.snap.json"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("cohesionless"));
     let snap: Value = serde_json::from_slice(&files[0]).unwrap();
     assert!(
         snap["contacts"].as_array().unwrap().len() > 100,
@@ -431,6 +445,23 @@ fn cohesive_2d_packing_relaxes_to_grc07_criteria_and_resumes_bit_identical() {
     let a = analyze_json_with(&out.join("final.snap.json"), &["--moduli"]);
     let m = check_moduli(&a, 2);
     assert!(f(m, &["voigt_bulk"]) > 3.0 * f(m, &["bulk"]), "{m}");
+    // GRC07 T.VI's split at GRC07 §IV.C's wider tolerance (1e-2 F0): the interactions that
+    // carry between 1e-4 and 1e-2 F0 move to z0, none changes sign, z stays.
+    let wide = analyze_json_with(
+        &out.join("final.snap.json"),
+        &["--cohesive-tolerance", "1e-2"],
+    );
+    assert_eq!(f(&wide, &["force_threshold"]), 1e-2);
+    assert_eq!(f(&wide, &["z"]), f(&a, &["z"]));
+    let split = |a: &Value, k: &str| f(a, &["cohesive_split", k]);
+    assert!(split(&wide, "z_zero") > split(&a, "z_zero"), "{wide}");
+    for k in ["z_plus", "z_minus"] {
+        assert!(split(&wide, k) <= split(&a, k), "{k}: {wide}");
+    }
+    for s in [&a, &wide] {
+        let sum = split(s, "z_plus") + split(s, "z_minus") + split(s, "z_zero");
+        assert!((sum - f(s, &["z"])).abs() < 1e-12, "{s}");
+    }
     let straight = std::fs::read_to_string(out.join("final.snap.json")).unwrap();
     let scene = dir.path().join("cohesive.toml");
     std::fs::write(
