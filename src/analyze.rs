@@ -160,17 +160,17 @@ pub fn analyze(
             import::read(code, path, &meta)?
         }
     };
+    if extra.cohesive_tolerance.is_some() && !snap.cohesive {
+        bail!(
+            "--cohesive-tolerance sets GRC07 T.VI's split of a cohesive packing; {} is cohesionless (its force threshold is relative to ⟨|N|⟩)",
+            path.display()
+        );
+    }
     if let Some(w) = write {
         snap.write(w)?;
     }
     let mut opts = Options::default();
     if let Some(t) = extra.cohesive_tolerance {
-        if !snap.cohesive {
-            bail!(
-                "--cohesive-tolerance sets GRC07 T.VI's split of a cohesive packing; {} is cohesionless (its force threshold is relative to ⟨|N|⟩)",
-                path.display()
-            );
-        }
         opts.cohesive_tolerance = t;
     }
     if extra.moduli {
