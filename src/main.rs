@@ -153,16 +153,16 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
-    /// Write LAMMPS, LIGGGHTS and YADE decks (input + data file of the same initial
-    /// configuration) of a scene into `reference-inputs/<scene>/<code>/`.
+    /// Write LAMMPS, LIGGGHTS and YADE decks and the exchange format (input + data file of the
+    /// same initial configuration) of a scene into `reference-inputs/<scene>/<code>/`.
     Decks {
         /// Scene files or embedded scene names.
         scenes: Vec<String>,
         /// Every embedded scene.
         #[arg(long)]
         all: bool,
-        /// Codes, comma-separated: lammps (Debian's 2021), lammps-2025, liggghts, yade (default:
-        /// these four); `generic`: the neutral exchange format (docs/exchange-format.md).
+        /// Codes, comma-separated: lammps (Debian's 2021), lammps-2025, liggghts, yade, and
+        /// `generic`, the neutral exchange format (docs/exchange-format.md) (default: all five).
         #[arg(long, value_delimiter = ',')]
         codes: Vec<String>,
         /// Output directory instead of `reference-inputs/<scene>/` (one scene only).

@@ -140,7 +140,7 @@ pub fn decks_command(
     out: Option<PathBuf>,
 ) -> Result<i32> {
     let codes = if codes.is_empty() {
-        Code::EXTERNAL.to_vec()
+        Code::DECKS.to_vec()
     } else {
         parse_codes(codes, false)?
     };

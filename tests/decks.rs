@@ -1,4 +1,5 @@
-//! The committed decks under `reference-inputs/<scene>/<code>/` are exactly what the generators
+//! The committed decks under `reference-inputs/<scene>/<code>/` (the external codes' and the
+//! exchange format's, `generic/exchange.json`) are exactly what the generators
 //! write: any change to a generator, the capability matrix or a scene shows as a reviewed diff
 //! of those files. After a deliberate change: `cargo run --release -- decks --all`, review
 //! `git diff reference-inputs/`, commit. (Data files are generated, not committed; their
@@ -32,7 +33,7 @@ fn committed_decks_match_the_generators() {
     for (name, text) in library::SCENES {
         let scene = Scene::from_toml(text, Path::new(name)).unwrap();
         let start = Start::of(&scene).unwrap_or_else(|e| panic!("scene {name}: {e}"));
-        for code in Code::EXTERNAL {
+        for code in Code::DECKS {
             let dir = root.join(name).join(code.name());
             let mut expected: Vec<(String, String)> = match decks::deck(&start, code) {
                 Ok(deck) => deck
@@ -56,12 +57,15 @@ fn committed_decks_match_the_generators() {
                     Err(_) => problems.push(format!("{} is missing", path.display())),
                 }
             }
-            // No stale files beside them (data files — data.*, grains.txt, cohesion.table — are
-            // ignored by git and allowed).
+            // No stale files beside them (data files — data.*, grains.txt, cohesion.table, the
+            // exchange's particles.csv — are ignored by git and allowed).
             if let Ok(entries) = std::fs::read_dir(&dir) {
                 for e in entries.flatten() {
                     let f = e.file_name().to_string_lossy().to_string();
-                    let data = f.starts_with("data.") || f == "grains.txt" || f == "cohesion.table";
+                    let data = f.starts_with("data.")
+                        || f == "grains.txt"
+                        || f == "cohesion.table"
+                        || f == "particles.csv";
                     if !data && !expected.iter().any(|(n, _)| n == &f) {
                         problems.push(format!(
                             "{} is not written by the generator",

@@ -65,6 +65,16 @@ impl Code {
         Code::Yade,
     ];
     pub const EXTERNAL: [Code; 4] = [Code::Lammps, Code::Lammps2025, Code::Liggghts, Code::Yade];
+    /// The codes whose decks are committed under `reference-inputs/<scene>/<code>/`: the
+    /// external codes and the exchange format (`generic`), so that a change to any generator
+    /// shows as a reviewed diff.
+    pub const DECKS: [Code; 5] = [
+        Code::Lammps,
+        Code::Lammps2025,
+        Code::Liggghts,
+        Code::Yade,
+        Code::Generic,
+    ];
 
     /// Name used on the command line, in directories and in golden files.
     pub fn name(self) -> &'static str {
