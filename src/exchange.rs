@@ -9,10 +9,11 @@
 use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::xcode::decks::generic::{
-    Exchange, ExchangeStage, EXCHANGE, OUT_CONTACTS, OUT_PARTICLES, OUT_STATUS, OUT_TRACE_CONTACTS,
-    OUT_TRACE_GRAINS,
+    Exchange, ExchangeKind, ExchangeStage, EXCHANGE, OUT_CONTACTS, OUT_PARTICLES, OUT_STATUS,
+    OUT_TRACE_CONTACTS, OUT_TRACE_GRAINS,
 };
 use grainbench_comparisons::xcode::decks::num;
+use grainbench_engine::plan::rate_time_unit;
 use grainbench_engine::scene::{Initial, Output, Particles, Scene, Step};
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
 use std::path::Path;
@@ -114,37 +115,35 @@ fn scene_of(ex: &Exchange, particles: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
-/// A stage as a scene step: the strain-rate cap back in the scene's inertia units (AR07 (23):
-/// I = ε̇√(m/(aP)); with cohesion GRC08's I_a = ε̇ T0).
+/// A stage as a scene step: the strain-rate cap back in the scene's inertia units, in the
+/// plan's time unit ([`rate_time_unit`]: AR07 (23) I = ε̇√(m/(aP)); GRC08's I_a = ε̇ T0).
 fn step(s: &ExchangeStage, cohesive: bool) -> Result<Step> {
-    Ok(match s.kind.as_str() {
-        "compress" => {
+    Ok(match s.kind {
+        ExchangeKind::Compress => {
             let p = s.pressure.context("a `compress` stage needs `pressure`")?;
-            let time_unit = if cohesive { 1.0 } else { 1.0 / p.sqrt() };
             Step::Compress {
                 pressure: p,
-                inertia_cap: s.max_strain_rate * time_unit,
+                inertia_cap: s.max_strain_rate * rate_time_unit(p, cohesive),
                 max_time: s.max_time,
-                criteria: s.criteria.clone(),
+                criteria: s.criteria,
                 mu: Some(s.mu),
                 kappa: Some(s.kappa),
                 relax: s.relax,
             }
         }
-        "fixed-volume" => Step::FixedVolume {
+        ExchangeKind::FixedVolume => Step::FixedVolume {
             max_time: s.max_time,
-            criteria: s.criteria.clone(),
+            criteria: s.criteria,
             full_time: s.full_time,
             mu: Some(s.mu),
             kappa: Some(s.kappa),
             relax: s.relax,
         },
-        "aggregate" => Step::Aggregate {
+        ExchangeKind::Aggregate => Step::Aggregate {
             max_time: s.max_time,
             mu: Some(s.mu),
             kappa: Some(s.kappa),
         },
-        other => bail!("unknown stage kind \"{other}\" (compress, fixed-volume, aggregate)"),
     })
 }
 

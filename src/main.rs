@@ -19,6 +19,7 @@ mod compare;
 mod consolidation;
 mod exchange;
 mod external;
+mod plan;
 mod reproduce;
 mod run;
 mod trace;
@@ -139,6 +140,16 @@ enum Command {
     },
     /// List the embedded scenes.
     Scenes,
+    /// What each stage of a scene will do, in absolute reduced units: cell control, law
+    /// numbers, time step, criteria, time limit — the plan our engine runs and every code's
+    /// deck and the exchange format carry.
+    Plan {
+        /// Scene file or embedded scene name.
+        scene: String,
+        /// The plan as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// The reference implementation of the exchange format (docs/exchange-format.md): run
     /// `INPUT/exchange.json` with `INPUT/particles.csv` in our engine and write
     /// `OUTPUT/particles.csv`, `contacts.csv` and `status.txt`, as any code in the harness must.
@@ -474,6 +485,7 @@ fn dispatch(cli: Cli) -> Result<i32> {
         }
         Command::Bench(args) => bench::bench(&args),
         Command::Scenes => common::list_scenes(),
+        Command::Plan { scene, json } => plan::plan_command(&scene, json),
         Command::RunExchange {
             input,
             output,

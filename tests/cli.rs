@@ -1048,3 +1048,35 @@ fn output_directory_is_protected() {
         "{err}"
     );
 }
+
+/// `grainbench plan` prints what each stage does in absolute units; `--json` is the engine's
+/// plan itself, the one the decks and the exchange format carry.
+#[test]
+fn plan_prints_each_stage_in_absolute_units() {
+    let out = grainbench().args(["plan", "ar07-C-ci"]).assert().success();
+    let text = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+    assert!(text.starts_with("plan of scene `ar07-C-ci`"), "{text}");
+    for want in [
+        "hard-sphere-mix",
+        "compress",
+        "stress control to P = ",
+        "dt = ",
+    ] {
+        assert!(text.contains(want), "no {want:?} in:\n{text}");
+    }
+    let out = grainbench()
+        .args(["plan", "ar07-C-ci", "--json"])
+        .assert()
+        .success();
+    let printed: grainbench_engine::plan::Plan =
+        serde_json::from_slice(&out.get_output().stdout).unwrap();
+    let scene = grainbench_engine::library::scene("ar07-C-ci")
+        .unwrap()
+        .unwrap();
+    assert_eq!(printed, grainbench_engine::run::plan_of(&scene).unwrap());
+    grainbench()
+        .args(["plan", "no-such-scene"])
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("no scene file"));
+}

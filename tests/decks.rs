@@ -99,3 +99,57 @@ fn capability_doc_matches_the_matrix() {
         path.display()
     );
 }
+
+/// Every deck and exchange file carries the engine's plan, not numbers of its own: for every
+/// embedded scene, the DEM stages of the common start are the plan's, and each exchange stage
+/// carries the plan's target, strain-rate cap, time step, time limit and tolerances.
+#[test]
+fn decks_and_exchange_files_carry_the_plan() {
+    use grainbench_comparisons::xcode::decks::generic::{exchange, ExchangeKind};
+    use grainbench_engine::plan::{PlanStep, StageKind};
+    for (name, text) in library::SCENES {
+        let scene = Scene::from_toml(text, Path::new(name)).unwrap();
+        let plan = grainbench_engine::run::plan_of(&scene).unwrap();
+        let start = Start::of(&scene).unwrap();
+        assert_eq!(start.plan, plan, "{name}: the start's plan");
+        let dem: Vec<_> = plan.steps[start.prelude.len()..]
+            .iter()
+            .filter_map(PlanStep::dem)
+            .copied()
+            .collect();
+        assert_eq!(start.stages, dem, "{name}: the decks' stages");
+        let (ex, _) = exchange(&start);
+        assert_eq!(ex.stages.len(), dem.len(), "{name}");
+        for (e, p) in ex.stages.iter().zip(&dem) {
+            let (kind, target) = match p.kind {
+                StageKind::Compress { pressure } => (ExchangeKind::Compress, Some(pressure)),
+                StageKind::FixedVolume { .. } => (ExchangeKind::FixedVolume, None),
+                StageKind::Aggregate => (ExchangeKind::Aggregate, None),
+            };
+            assert_eq!((e.kind, e.pressure), (kind, target), "{name}");
+            assert_eq!(e.max_strain_rate, p.max_strain_rate, "{name}: rate cap");
+            assert_eq!(
+                (e.dt, e.max_steps),
+                (p.dt, p.max_steps),
+                "{name}: time step"
+            );
+            assert_eq!(
+                (e.max_time, e.mu, e.kappa),
+                (p.max_time, p.mu, p.kappa),
+                "{name}"
+            );
+            let t = &e.tolerances;
+            assert_eq!(
+                [t.force, t.moment, t.stress, t.kinetic_per_grain],
+                [
+                    p.tolerances.force,
+                    p.tolerances.moment,
+                    p.tolerances.stress,
+                    p.tolerances.kinetic_per_grain
+                ],
+                "{name}: tolerances"
+            );
+            assert_eq!((e.criteria, e.relax), (p.criteria, p.relax), "{name}");
+        }
+    }
+}

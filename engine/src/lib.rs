@@ -5,7 +5,8 @@
 //! Layout: [`geometry`] (2D/3D abstraction), [`cell`] (periodic cell and barostat, AR07 (6)–(8)),
 //! [`contact`] (contact laws), [`neighbor`] (cell lists + Verlet skin), [`network`] (the axes an
 //! interaction network wraps), [`system`] (state and
-//! integrator), [`init`] (random gas), [`scene`] (scene files), [`run`] (protocols, equilibrium
+//! integrator), [`init`] (random gas), [`scene`] (scene files), [`plan`] (the protocol resolved into
+//! absolute units, read by the run and the cross-code decks), [`run`] (protocols, equilibrium
 //! criteria, blow-up detection, checkpoints), [`snapshot`] (on-disk configurations), [`library`] (embedded
 //! scenes), [`protocols`] (event-driven hard grains, Lubachevsky–Stillinger growth, FCC).
 
@@ -17,6 +18,7 @@ pub mod library;
 pub mod neighbor;
 pub mod network;
 pub mod parallel;
+pub mod plan;
 pub mod protocols;
 pub mod run;
 pub mod scene;

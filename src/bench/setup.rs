@@ -1,7 +1,7 @@
 //! What `bench` runs: the scene cut to a fixed number of steps, or started from a snapshot.
 
 use anyhow::{bail, Result};
-use grainbench_comparisons::xcode::decks::{StageKind, Start, Tolerances};
+use grainbench_comparisons::xcode::decks::Start;
 use grainbench_engine::geometry::{D2, D3};
 use grainbench_engine::run::initial_grains;
 use grainbench_engine::scene::{Criteria, Scene, Step};
@@ -60,7 +60,7 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
         Step::Compress {
             criteria, relax, ..
         } => {
-            *criteria = never.clone();
+            *criteria = never;
             *relax = None;
         }
         Step::FixedVolume {
@@ -69,7 +69,7 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
             relax,
             ..
         } => {
-            *criteria = never.clone();
+            *criteria = never;
             *full_time = true;
             *relax = None;
         }
@@ -81,7 +81,7 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
         } => {
             stage = Step::FixedVolume {
                 max_time: *max_time,
-                criteria: never.clone(),
+                criteria: never,
                 full_time: true,
                 mu: *mu,
                 kappa: *kappa,
@@ -93,7 +93,7 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
     let mut cut = scene.clone();
     cut.protocol = stages[..k].iter().map(|(_, s)| s.clone()).collect();
     cut.protocol.push(stage);
-    let mut start = Start::of(&cut).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
+    let start = Start::of(&cut).map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
     let dt = start.stages[0].dt;
     // Half a step below S·dt: the time after S steps passes it whatever the rounding.
     let max_time = (steps as f64 - 0.5) * dt;
@@ -103,18 +103,10 @@ pub fn fixed_steps(scene: &Scene, steps: u64) -> Result<(Scene, Start, u64)> {
         }
         _ => unreachable!(),
     }
-    let st = &mut start.stages[0];
-    st.max_time = max_time;
-    st.max_steps = steps;
-    let pressure = match st.kind {
-        StageKind::Compress { pressure } => Some(pressure),
-        _ => None,
-    };
-    st.tolerances = Tolerances::of(&never, pressure);
-    if let StageKind::FixedVolume { full_time } = &mut st.kind {
-        *full_time = true;
-    }
-    start.scene = cut.clone();
+    let start = start
+        .with_scene(cut.clone())
+        .map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;
+    debug_assert_eq!(start.stages[0].max_steps, steps);
     Ok((cut, start, steps))
 }
 

@@ -24,3 +24,16 @@ pub fn present(code: Code) -> bool {
 pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
+
+/// The plan of a hand-made start: `scene`'s, with `stages` as its DEM stages (the two-particle
+/// tests run a fixed cell for a given number of steps of a given time step).
+#[allow(dead_code)] // not every test file uses it
+pub fn plan(
+    scene: &grainbench_engine::scene::Scene,
+    stages: &[grainbench_engine::plan::PlanStage],
+) -> grainbench_engine::plan::Plan {
+    use grainbench_engine::plan::{Plan, PlanStep};
+    let mut plan = Plan::new(scene, &[1.0]).expect("plan");
+    plan.steps = stages.iter().map(|s| PlanStep::Dem(*s)).collect();
+    plan
+}

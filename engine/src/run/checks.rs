@@ -1,13 +1,14 @@
 //! Checks at each check point: the equilibrium measures, clusters, contacts at a threshold,
 //! blow-up detection.
 
-use super::numerics::StageNumerics;
 use super::output::snapshot_of;
 use super::relax::Settling;
 use super::report::{Checks, RunError};
 use crate::cell::Control;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
+use crate::plan::{Plan, PlanStage, StageKind, Tolerances};
+use crate::scene::Mu;
 use crate::system::{self, System};
 
 /// An interacting pair as the checks see it (12 bytes instead of a whole
@@ -88,28 +89,27 @@ pub(super) fn step_correlation<V: crate::geometry::VectorOps>(a: &[V], b: &[V]) 
     }
 }
 
-/// The error for a blown-up run of scene `scene`; `sys` is returned to the last good
+/// The error for a blown-up run of `plan` in `stage`; `sys` is returned to the last good
 /// checkpoint to write it.
 pub(super) fn unstable<D: Dim, L: ContactLaw<D>>(
-    scene: &str,
-    num: &StageNumerics,
+    plan: &Plan,
+    stage: &PlanStage,
     sys: &mut System<D, L>,
     last_good: &Option<system::LastGood<D, L>>,
     what: String,
 ) -> RunError {
-    let (_, k_max) = num.time_step(sys);
+    let k_max = stage.k_max;
     let cause = format!(
         "{what}. Likely cause: the time step dt = {:.4e} (numerics.dt_fraction = {} of the contact duration for K_max = {:.4e}) is too large for the contacts, or the contacts are too soft (law.kappa) for the applied pressure. Try a smaller numerics.dt_fraction, or a larger numerics.stiffness_force if forces exceed the expected scale",
-        sys.dt, num.dt_fraction, k_max
+        sys.dt, plan.dt_fraction, k_max
     );
-    stopped(scene, num, sys, last_good, cause)
+    stopped(plan, sys, last_good, cause)
 }
 
 /// The run stops as [`RunError::Unstable`] for `cause` (the whole message), restoring the
 /// last good state for the snapshot it carries.
 pub(super) fn stopped<D: Dim, L: ContactLaw<D>>(
-    scene: &str,
-    num: &StageNumerics,
+    plan: &Plan,
     sys: &mut System<D, L>,
     last_good: &Option<system::LastGood<D, L>>,
     cause: String,
@@ -119,14 +119,13 @@ pub(super) fn stopped<D: Dim, L: ContactLaw<D>>(
         sys.restore(cp);
     }
     RunError::Unstable {
-        scene: scene.into(),
+        scene: plan.scene.clone(),
         step,
         time,
         cause,
         last_good: Box::new(snapshot_of(
             sys,
-            scene,
-            num,
+            plan,
             "unstable",
             match sys.cell.control {
                 Control::Stress { target, .. } => Some(target[0]),
@@ -145,7 +144,7 @@ pub(super) fn stopped<D: Dim, L: ContactLaw<D>>(
 /// the criterion).
 pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
-    num: &StageNumerics,
+    stage: &PlanStage,
     inter: &[Link],
     checks: &Checks,
     free_rollers: bool,
@@ -154,7 +153,7 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
     let pressure_deviation = if checks.pressure_target.is_nan() {
         0.0
     } else {
-        (checks.pressure - checks.pressure_target) / (num.stress * num.f_ref)
+        (checks.pressure - checks.pressure_target) / stage.tolerances.stress
     };
     if !free_rollers {
         return Settling {
@@ -188,7 +187,7 @@ pub(super) fn settle_view<D: Dim, L: ContactLaw<D>>(
             }
         })
         .sum();
-    let kinetic_at_rest = ke / sys.len() as f64 / (num.kinetic * num.f_ref) < factor;
+    let kinetic_at_rest = ke / sys.len() as f64 / stage.tolerances.kinetic_per_grain < factor;
     Settling {
         pairs: Some(pairs),
         at_rest: kinetic_at_rest && checks.stress_ratio < factor,
@@ -223,10 +222,10 @@ fn kinetic_parts<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, i: usize) -> (f64
 /// interactions `inter` ([`links_into`], computed once per check by the caller).
 pub(super) fn measure<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
-    num: &StageNumerics,
+    stage: &PlanStage,
     inter: &[Link],
 ) -> Checks {
-    let f_ref = num.f_ref;
+    let tol = &stage.tolerances;
     let n = sys.len() as f64;
     let (fmax, tmax) = sys.max_unbalanced();
     // Kinetic energy: all translations, and the rotations of grains that touch another one. A
@@ -249,12 +248,13 @@ pub(super) fn measure<D: Dim, L: ContactLaw<D>>(
     let ke = (ke_t + ke_r) / n;
     let sc = sys.contact_stress();
     let p = (0..D::D).map(|a| sc[a][a]).sum::<f64>() / D::D as f64;
-    let (target, stress_ratio) = match (num.compress, sys.cell.control) {
+    let compress = matches!(stage.kind, StageKind::Compress { .. });
+    let (target, stress_ratio) = match (compress, sys.cell.control) {
         (true, Control::Stress { target, .. }) => {
             let dev = (0..D::D)
                 .map(|a| (sc[a][a] - target[a]).abs())
                 .fold(0.0, f64::max);
-            (target[0], dev / (num.stress * f_ref))
+            (target[0], dev / tol.stress)
         }
         _ => (f64::NAN, 0.0),
     };
@@ -262,21 +262,17 @@ pub(super) fn measure<D: Dim, L: ContactLaw<D>>(
         packing_fraction: sys.packing_fraction(),
         pressure: p,
         pressure_target: target,
-        force_ratio: fmax / (num.force * f_ref),
-        moment_ratio: if L::MOMENTS {
-            tmax / (num.moment * f_ref)
-        } else {
-            0.0
-        },
+        force_ratio: fmax / tol.force,
+        moment_ratio: if L::MOMENTS { tmax / tol.moment } else { 0.0 },
         stress_ratio,
-        kinetic_ratio: ke / (num.kinetic * f_ref),
+        kinetic_ratio: ke / tol.kinetic_per_grain,
         kinetic_per_grain: ke,
         free_spin_per_grain: ke_free / n,
         strain_rate: (0..D::D)
             .map(|a| (sys.cell.ldot[a] / sys.cell.l[a]).abs())
             .fold(0.0, f64::max),
         interactions: inter.len(),
-        clusters: if num.aggregate {
+        clusters: if stage.kind == StageKind::Aggregate {
             clusters(sys.len(), inter)
         } else {
             0
@@ -303,13 +299,16 @@ impl AtThreshold {
     }
 }
 
-/// Contacts whose tangential force or rolling moment sits at its threshold.
+/// Contacts whose tangential force or rolling moment sits at its threshold μ, μ_r, split by
+/// the equilibrium tolerances `tol`.
 pub(super) fn contacts_at_threshold<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
-    num: &StageNumerics,
+    mu: Mu,
+    mu_r: f64,
+    tol: &Tolerances,
 ) -> AtThreshold {
-    let (mu, mu_r) = (num.mu.value(), num.mu_r);
-    let (force_tolerance, moment_tolerance) = (num.force * num.f_ref, num.moment * num.f_ref);
+    let mu = mu.value();
+    let (force_tolerance, moment_tolerance) = (tol.force, tol.moment);
     let mut count = AtThreshold::default();
     sys.for_each_interaction(|c| {
         if c.gap >= 0.0 {
@@ -335,9 +334,7 @@ mod tests {
     use crate::contact::linear::{Linear, NoCohesion};
     use crate::contact::slider::{Coulomb, NoRolling};
     use crate::geometry::D2;
-    use crate::scene::{Mu, Scene};
     use nalgebra::Vector2;
-    use std::path::Path;
 
     type Law = Linear<NoCohesion, Coulomb, NoRolling>;
 
@@ -377,17 +374,14 @@ mod tests {
         sys
     }
 
-    fn numerics(force_tolerance: f64) -> StageNumerics {
-        let text =
-            include_str!("../../../reference-inputs/scenes/grc07-cohesionless-phi036-mu05-ci.toml");
-        let scene = Scene::from_toml(text, Path::new("s.toml")).unwrap();
-        StageNumerics {
-            mu: Mu::Finite(0.5),
-            mu_r: f64::INFINITY,
+    fn at_threshold(sys: &System<D2, Law>, force_tolerance: f64) -> AtThreshold {
+        let tol = Tolerances {
             force: force_tolerance,
-            f_ref: 1.0,
-            ..StageNumerics::of_scene(&scene)
-        }
+            moment: 1e-4,
+            stress: 1e-4,
+            kinetic_per_grain: 1e-8,
+        };
+        contacts_at_threshold(sys, Mu::Finite(0.5), f64::INFINITY, &tol)
     }
 
     /// GRC07 §II.D asks for strict Coulomb inequalities; a sliding contact whose Coulomb
@@ -398,18 +392,18 @@ mod tests {
         let mut n = 0.0;
         sliding.for_each_interaction(|c| n = c.normal_elastic);
         assert!((n - 1.0).abs() < 0.01, "N = {n}");
-        let loaded = contacts_at_threshold(&sliding, &numerics(1e-4));
+        let loaded = at_threshold(&sliding, 1e-4);
         assert_eq!(
             (loaded.all, loaded.below_tolerance, loaded.loaded()),
             (1, 0, 1)
         );
-        let ignored = contacts_at_threshold(&sliding, &numerics(2.0));
+        let ignored = at_threshold(&sliding, 2.0);
         assert_eq!(
             (ignored.all, ignored.below_tolerance, ignored.loaded()),
             (1, 1, 0)
         );
         // At rest the contact is inside the cone.
-        let resting = contacts_at_threshold(&pair(false), &numerics(1e-4));
+        let resting = at_threshold(&pair(false), 1e-4);
         assert_eq!(resting, AtThreshold::default());
     }
 }

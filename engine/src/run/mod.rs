@@ -2,8 +2,8 @@
 //! combination of dimension and law features), then the protocol steps with the equilibrium
 //! criteria (AR07 §III, GRC07 §II.D, GRC08 §II.D.1), blow-up detection and snapshots.
 //!
-//! [`setup`] builds the grains and the system, [`stages`] runs the protocol, [`numerics`]
-//! resolves what each stage reads of the scene, [`checks`] measures equilibrium and detects
+//! [`setup`] builds the grains and the system, [`stages`] runs the protocol as the
+//! [`crate::plan`] resolves it, [`checks`] measures equilibrium and detects
 //! blow-ups, [`relax`] and [`quench`] are the optional final phases of a stage (GRC07 damping,
 //! AR07's velocity quench), [`output`] writes snapshots, [`report`] holds what a run reports,
 //! [`options`] how it is driven, [`checkpoint`] the resumable state on disk.
@@ -11,7 +11,6 @@
 pub mod checkpoint;
 pub mod checks;
 pub mod fire;
-pub mod numerics;
 pub mod options;
 pub mod output;
 pub mod particles_file;
@@ -24,13 +23,10 @@ pub mod stages;
 pub use crate::contact::from_scene::{
     adhesion, dmt_law, hertz_mindlin_law, linear_law, rolling_spring, sjkr_law,
 };
-pub use numerics::StageNumerics;
 pub use options::{CheckpointSpec, DumpSpec, RunOptions, StageEndHook};
 pub use output::snapshot_of;
 pub use report::{Checks, Outcome, Progress, RunError, StepEnd, StepReport};
-pub use setup::{
-    build_system, cell_mass, initial_grains, system_of, time_step, time_step_for, Grains,
-};
+pub use setup::{build_system, cell_mass, initial_grains, system_of, time_step, Grains};
 pub use stages::{compress_until, prepared_grains, run_protocol};
 
 use crate::contact::dmt::Dmt;
@@ -44,7 +40,6 @@ use crate::scene::{Law, Mu, Scene, Step};
 use crate::snapshot::Snapshot;
 use crate::system::System;
 use checkpoint::Header;
-use checks::contacts_at_threshold;
 use stages::{hard_stage, run_stages, write_checkpoint, Ctx, Payload, PayloadRef};
 
 /// Runs a validated scene to the end of its protocol (or from a checkpoint to the end).
@@ -58,6 +53,16 @@ pub fn run_scene(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunErr
     })
 }
 
+/// The plan of a validated scene: its protocol resolved for its initial grains (the hard-grain
+/// stages change neither the diameters nor, so, the time step).
+pub fn plan_of(scene: &Scene) -> Result<crate::plan::Plan, String> {
+    let diameter = match scene.dimension {
+        2 => initial_grains::<D2>(scene)?.diameter,
+        _ => initial_grains::<D3>(scene)?.diameter,
+    };
+    crate::plan::Plan::new(scene, &diameter)
+}
+
 fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunError> {
     let resume = opts.resume.take();
     let mut ctx = Ctx::<D>::new(scene);
@@ -69,8 +74,9 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
             k = h.stage;
             ctx.wall_before = h.wall_seconds;
             ctx.reports = h.reports.clone();
-            ctx.pressure = h.pressure;
             ctx.neighbor_builds = h.neighbor_builds;
+            // The last stage entered: this one inside it, the one before at its start.
+            ctx.current = if h.inside { Some(k) } else { k.checked_sub(1) };
             if h.inside {
                 inside = Some((cp.header, cp.payload));
             } else {
@@ -88,6 +94,11 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
         }
         None => ctx.grains = initial_grains::<D>(scene).map_err(|e| ctx.setup_error(e))?,
     }
+    if inside.is_none() {
+        // Inside a stage, the grains (and so the plan) come with the checkpoint's state.
+        let diameter = ctx.grains.diameter.clone();
+        ctx.plan_for(&diameter)?;
+    }
     let mut snapshot = None;
     let mut interrupted = false;
     while k < ctx.stages.len() {
@@ -98,7 +109,7 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
                 let payload = PayloadRef::<D, ()>::AtStart(&ctx.grains);
                 write_checkpoint(&ctx, spec, &h, &payload)?;
             }
-            hard_stage(&mut ctx, k, &step)?;
+            hard_stage(&mut ctx, k)?;
             snapshot = None;
             k += 1;
             continue;
@@ -237,10 +248,15 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
         Some((h, payload)) => match checkpoint::decode::<Payload<D, L::History>>(&payload)
             .map_err(|e| ctx.setup_error(e))?
         {
-            Payload::Inside(st, watch) => (
-                System::from_state(law, st),
-                Some((h.stage_time0, h.stage_steps0, h.stage_wall, watch)),
-            ),
+            Payload::Inside(st, watch) => {
+                let sys = System::from_state(law, st);
+                let diameter: Vec<f64> = sys.radius.iter().map(|r| 2.0 * r).collect();
+                ctx.plan_for(&diameter)?;
+                (
+                    sys,
+                    Some((h.stage_time0, h.stage_steps0, h.stage_wall, watch)),
+                )
+            }
             Payload::AtStart(_) => {
                 return Err(ctx.setup_error("checkpoint payload does not match its header".into()))
             }
@@ -251,7 +267,7 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
             // μ change; docs/exchange-format.md), the law kept as the base the stages scale.
             // An empty range (a protocol that ended with hard-grain stages) keeps the law's κ.
             let factor = range.clone().next().map_or(1.0, |k| {
-                StageNumerics::of_stage(scene, &ctx.stages[k].1, ctx.pressure).kappa_factor
+                ctx.plan().steps[k].dem().expect("a DEM stage").kappa_factor
             });
             sys.law = law.with_kappa_scaled(factor);
             sys.init_forces();
@@ -259,11 +275,9 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
             (sys, None)
         }
     };
-    let num = StageNumerics::of_scene(scene);
-    let (dt, k_max) = num.time_step(&sys);
-    debug_assert!(resume_at.is_some() || sys.dt == dt);
+    debug_assert!(resume_at.is_some() || sys.dt == ctx.plan().dt);
     ctx.dt = sys.dt;
-    ctx.k_max = k_max;
+    ctx.k_max = ctx.plan().k_max;
     ctx.law = sys.law.describe();
     let builds0 = sys.nlist.builds;
     let stopped = {
@@ -271,16 +285,16 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
         run_stages(ctx, &mut sys, range, resume_at, opts)
     }?;
     ctx.neighbor_builds += sys.nlist.builds - builds0;
-    ctx.at_threshold = contacts_at_threshold(&sys, &ctx.last_numerics());
+    ctx.at_threshold = ctx.contacts_at_threshold(&sys);
     let status = if stopped {
-        "interrupted"
+        StepEnd::Interrupted
     } else if ctx.reports.iter().all(|r| r.end.ok()) {
-        "equilibrium"
+        StepEnd::Equilibrium
     } else {
-        "time-limit"
+        StepEnd::TimeLimit
     };
     sys.shed_step_buffers();
-    let snap = snapshot_of(&sys, &scene.name, &num, status, ctx.pressure);
+    let snap = snapshot_of(&sys, ctx.plan(), status.as_str(), ctx.pressure());
     ctx.grains = Grains {
         l: sys.cell.l,
         s: sys.s.clone(),
@@ -331,16 +345,17 @@ max_time = 5.0
         (scene, sys)
     }
 
-    /// Shedding the step buffers before the final snapshot (issue 15, peak memory) leaves
+    /// Shedding the step buffers before the final snapshot (for the peak memory) leaves
     /// the interactions and everything the snapshot reads as they were.
     #[test]
     fn shedding_the_step_buffers_keeps_the_snapshot() {
         let (scene, mut sys) = dense_3d();
-        let num = StageNumerics::of_scene(&scene);
-        let before = snapshot_of(&sys, "shed", &num, "time-limit", Some(1.0));
+        let diameter: Vec<f64> = sys.radius.iter().map(|r| 2.0 * r).collect();
+        let plan = crate::plan::Plan::new(&scene, &diameter).unwrap();
+        let before = snapshot_of(&sys, &plan, "time-limit", Some(1.0));
         assert!(before.contacts.len() > sys.len(), "a dense packing");
         sys.shed_step_buffers();
-        let after = snapshot_of(&sys, "shed", &num, "time-limit", Some(1.0));
+        let after = snapshot_of(&sys, &plan, "time-limit", Some(1.0));
         assert!(
             before == after,
             "the snapshot changed when the step buffers were shed"

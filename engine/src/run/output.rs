@@ -1,24 +1,24 @@
 //! The snapshot of a system: what a run writes.
 
 use super::checkpoint;
-use super::numerics::StageNumerics;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
+use crate::plan::Plan;
 use crate::scene::Mu;
 use crate::snapshot::{self, Snapshot, Vector};
 use crate::system::System;
 
-/// The snapshot of the current state.
+/// The snapshot of the current state of a run of `plan` (the law's force unit, μ and
+/// attraction; `pressure_target`, the pressure last prescribed).
 pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
     sys: &System<D, L>,
-    scene: &str,
-    num: &StageNumerics,
+    plan: &Plan,
     status: &str,
     pressure_target: Option<f64>,
 ) -> Snapshot {
     let n = sys.len();
-    let cohesive = num.cohesive;
-    let mu = match num.mu {
+    let cohesive = plan.cohesive;
+    let mu = match plan.mu {
         Mu::Finite(x) => Some(x),
         Mu::Infinite => None,
     };
@@ -28,8 +28,8 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
             .map(|a| (0..D::D).map(|b| t[a][b] / omega).collect())
             .collect()
     };
-    // Straight into the snapshot's list, without an intermediate list of interactions
-    // (issue 15, peak memory of large packings).
+    // Straight into the snapshot's list, without an intermediate list of interactions: the
+    // peak memory of large packings.
     let mut contacts = Vec::new();
     sys.for_each_interaction(|c| {
         contacts.push(snapshot::Contact {
@@ -55,7 +55,7 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
         format: snapshot::FORMAT.into(),
         version: snapshot::VERSION,
         code: checkpoint::code(),
-        scene: scene.into(),
+        scene: plan.scene.clone(),
         dimension: D::D,
         time: sys.time,
         step: sys.step,
@@ -66,7 +66,7 @@ pub fn snapshot_of<D: Dim, L: ContactLaw<D>>(
             format!("P_ref a^{}", D::D - 1)
         },
         pressure_target,
-        cohesive: num.attractive,
+        cohesive: plan.attractive,
         mu,
         cell: snapshot::Cell {
             lengths: sys.cell.l.to_vec(),

@@ -1,16 +1,12 @@
 //! From a scene to a system: the initial grains, the cell mass, the time step.
 
-use super::numerics::StageNumerics;
 use crate::cell::Cell;
-use crate::contact::from_scene::{hertz_mindlin_law, linear_law};
-use crate::contact::hertz_mindlin::HertzMindlin;
-use crate::contact::linear::{Linear, NoCohesion};
-use crate::contact::slider::{Frictionless, NoRolling};
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
 use crate::init::{maxwell_velocities_spread, random_gas};
+use crate::plan;
 use crate::protocols::lattice;
-use crate::scene::{Arrangement, Law, Maxwell, Scene};
+use crate::scene::{Arrangement, Maxwell, Scene};
 use crate::snapshot::Snapshot;
 use crate::system::System;
 
@@ -22,7 +18,7 @@ pub struct Grains<D: Dim> {
     pub l: D::V,
     pub s: Vec<D::V>,
     pub u: Vec<D::V>,
-    /// Spins (issue 19: explicit-particle starts); empty = all at rest. Not in checkpoints:
+    /// Spins (explicit-particle starts); empty = all at rest. Not in checkpoints:
     /// a checkpoint holds grains only at the start of a hard-grain stage, which ends with the
     /// grains at rest.
     #[serde(skip)]
@@ -172,40 +168,21 @@ pub fn system_of<D: Dim, L: ContactLaw<D>>(
     }
     sys.time = grains.time;
     sys.step = grains.step;
-    let (dt, _) = StageNumerics::of_scene(scene).time_step(&sys);
-    sys.dt = dt;
+    sys.dt = time_step(scene, &sys).0;
     sys.check_cell()?;
     Ok(sys)
 }
 
-/// The time step of `sys` with the numerics of `scene` ([`StageNumerics::time_step`]).
-/// Returns (dt, K_max).
+/// The time step of `sys` with the numerics of `scene` ([`plan::time_step`] at the law's κ,
+/// as [`plan::Plan::dt`]). Returns (dt, K_max).
 pub fn time_step<D: Dim, L: ContactLaw<D>>(scene: &Scene, sys: &System<D, L>) -> (f64, f64) {
-    StageNumerics::of_scene(scene).time_step(sys)
-}
-
-/// The time step our engine uses for `grains` at stiffness `kappa` (the scene's law with κ
-/// replaced): `dt_fraction` of the binary contact duration with the stiffest contact.
-pub fn time_step_for<D: Dim>(scene: &Scene, grains: &Grains<D>, kappa: f64) -> Result<f64, String> {
-    let factor = kappa / scene.law.kappa();
-    let dt = match &scene.law {
-        Law::HertzMindlin { .. } => {
-            let law = <HertzMindlin<Frictionless> as ContactLaw<D>>::with_kappa_scaled(
-                &hertz_mindlin_law(&scene.law, Frictionless),
-                factor,
-            );
-            time_step::<D, _>(scene, &system_of(scene, law, grains)?).0
-        }
-        Law::Linear { .. } => {
-            let law =
-                <Linear<NoCohesion, Frictionless, NoRolling> as ContactLaw<D>>::with_kappa_scaled(
-                    &linear_law(&scene.law, NoCohesion, Frictionless, NoRolling),
-                    factor,
-                );
-            time_step::<D, _>(scene, &system_of(scene, law, grains)?).0
-        }
-    };
-    Ok(dt)
+    plan::time_step(
+        &sys.law,
+        &sys.mass,
+        &sys.radius,
+        scene.numerics.dt_fraction,
+        plan::stiffness_force(scene),
+    )
 }
 
 #[cfg(test)]

@@ -7,7 +7,6 @@ use super::checks::{
     Link,
 };
 use super::checks::{FLIP_CHECKS, FLIP_CORRELATION};
-use super::numerics::StageNumerics;
 use super::options::{CheckpointSpec, RunOptions};
 use super::output::snapshot_of;
 use super::relax::StageWatch;
@@ -19,6 +18,7 @@ use crate::geometry::{Dim, VectorOps as _};
 use crate::init::maxwell_velocities;
 use crate::neighbor::branch;
 use crate::network;
+use crate::plan::{self, HardStage, Plan, PlanStage, PlanStep, StageKind};
 use crate::protocols::event_driven::HardSpheres;
 use crate::scene::{Scene, Step};
 use crate::snapshot::Snapshot;
@@ -50,11 +50,16 @@ pub(super) enum PayloadRef<'a, D: Dim, H> {
 /// Bookkeeping carried through the stages.
 pub(super) struct Ctx<'s, D: Dim> {
     pub(super) scene: &'s Scene,
+    /// The scene's stages (pressure programs and κ ramps unrolled): the run's structure,
+    /// known before the grains.
     pub(super) stages: Vec<(usize, Step)>,
+    /// The resolved protocol, once the grains are known ([`Ctx::plan_for`]).
+    plan: Option<Plan>,
+    /// The last stage entered (`None` before the first).
+    pub(super) current: Option<usize>,
     pub(super) start: Instant,
     pub(super) wall_before: f64,
     pub(super) reports: Vec<StepReport>,
-    pub(super) pressure: Option<f64>,
     pub(super) grains: Grains<D>,
     pub(super) neighbor_builds: u64,
     pub(super) last_checkpoint: Instant,
@@ -70,10 +75,11 @@ impl<'s, D: Dim> Ctx<'s, D> {
         Ctx {
             scene,
             stages: scene.stages(),
+            plan: None,
+            current: None,
             start: Instant::now(),
             wall_before: 0.0,
             reports: Vec::new(),
-            pressure: None,
             grains: Grains {
                 l: D::V::zero(),
                 s: Vec::new(),
@@ -92,13 +98,44 @@ impl<'s, D: Dim> Ctx<'s, D> {
         }
     }
 
-    /// The numerics of the last stage: its pressure and preset set the force tolerance that
-    /// judges the contacts at a threshold at the end of the run.
-    pub(super) fn last_numerics(&self) -> StageNumerics {
-        self.stages.last().map_or_else(
-            || StageNumerics::of_scene(self.scene),
-            |(_, step)| StageNumerics::of_stage(self.scene, step, self.pressure),
-        )
+    /// Builds the plan for grains of diameters `diameter`, once (the grains are known at the
+    /// start of a run, or once a checkpoint taken inside a stage is decoded).
+    pub(super) fn plan_for(&mut self, diameter: &[f64]) -> Result<&Plan, RunError> {
+        if self.plan.is_none() {
+            let plan = Plan::new(self.scene, diameter).map_err(|e| self.setup_error(e))?;
+            self.plan = Some(plan);
+        }
+        Ok(self.plan())
+    }
+
+    /// The plan (built by [`Ctx::plan_for`] before any stage runs).
+    pub(super) fn plan(&self) -> &Plan {
+        self.plan
+            .as_ref()
+            .expect("the plan is built before the stages run")
+    }
+
+    /// The pressure last prescribed, as of the last stage entered.
+    pub(super) fn pressure(&self) -> Option<f64> {
+        self.current.and_then(|k| self.plan().pressure_at(k))
+    }
+
+    /// Contacts at a threshold, judged at the end of the run by the law's μ and μ_r and the
+    /// tolerances of the last DEM stage.
+    pub(super) fn contacts_at_threshold<L: ContactLaw<D>>(
+        &self,
+        sys: &System<D, L>,
+    ) -> super::checks::AtThreshold {
+        let plan = self.plan();
+        match plan.dem_stages().last() {
+            Some(s) => contacts_at_threshold(
+                sys,
+                plan.mu,
+                plan.mu_r.unwrap_or(f64::INFINITY),
+                &s.tolerances,
+            ),
+            None => Default::default(),
+        }
     }
 
     pub(super) fn header(
@@ -121,7 +158,7 @@ impl<'s, D: Dim> Ctx<'s, D> {
             stage_wall,
             wall_seconds: self.wall_before + self.start.elapsed().as_secs_f64(),
             reports: self.reports.clone(),
-            pressure: self.pressure,
+            pressure: self.pressure(),
             neighbor_builds: self.neighbor_builds,
         }
     }
@@ -154,7 +191,12 @@ fn stage_seed(seed: u64, k: usize) -> u64 {
 }
 
 /// Hard-grain stages: expansion, event-driven mixing, Lubachevsky–Stillinger growth.
-pub(super) fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize, step: &Step) -> Result<(), RunError> {
+pub(super) fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize) -> Result<(), RunError> {
+    let step = match ctx.plan().steps[k] {
+        PlanStep::Hard(h) => h,
+        PlanStep::Dem(_) => unreachable!("DEM stage in hard_stage"),
+    };
+    ctx.current = Some(k);
     let t = Instant::now();
     let scene_name = ctx.scene.name.clone();
     let setup = |message: String| RunError::Setup {
@@ -168,29 +210,29 @@ pub(super) fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize, step: &Step) -> Res
     let hard = |g: &Grains<D>| {
         let vel = maxwell_velocities::<D>(&mass, 1.0, stage_seed(ctx.scene.seed, k));
         HardSpheres::<D>::new(g.l, g.s.clone(), radius.clone(), mass.clone(), vel).map_err(|e| {
-            format!("{} stage {}: {e}. Grains must not overlap before hard-sphere dynamics: add an `expand` step first (AR07 §IV.B uses factor = 1.005)", step.kind(), k + 1)
+            format!("{} stage {}: {e}. Grains must not overlap before hard-sphere dynamics: add an `expand` step first (AR07 §IV.B uses factor = 1.005)", step.name(), k + 1)
         })
     };
     let (time, collisions) = match step {
-        Step::Expand { factor } => {
-            g.l = g.l * *factor;
+        HardStage::Expand { factor } => {
+            g.l = g.l * factor;
             (0.0, 0)
         }
-        Step::HardSphereMix {
+        HardStage::HardSphereMix {
             collisions_per_grain,
         } => {
             let mut hs = hard(g).map_err(setup)?;
-            let st = hs.run_collisions(*collisions_per_grain);
+            let st = hs.run_collisions(collisions_per_grain);
             g.s = hs.s;
             (st.time, st.collisions)
         }
-        Step::Grow {
+        HardStage::Grow {
             packing_fraction,
             rate,
         } => {
             let mut hs = hard(g).map_err(setup)?;
             let st = hs
-                .grow(*packing_fraction, *rate)
+                .grow(packing_fraction, rate)
                 .map_err(|e| setup(format!("grow stage {}: {e}", k + 1)))?;
             // Back to the length unit a: the grains keep their diameters, the cell shrinks.
             let factor = hs.radius[0] / radius[0];
@@ -198,14 +240,13 @@ pub(super) fn hard_stage<D: Dim>(ctx: &mut Ctx<D>, k: usize, step: &Step) -> Res
             g.s = hs.s;
             (st.time, st.collisions)
         }
-        _ => unreachable!("DEM stage in hard_stage"),
     };
     g.u = vec![D::V::zero(); n];
     g.w = Vec::new();
     let phi: f64 = g.diameter.iter().map(|d| D::grain_volume(*d)).sum::<f64>() / D::product(g.l);
     ctx.reports.push(StepReport {
         index: k,
-        kind: step.kind().into(),
+        kind: step.name().into(),
         end: StepEnd::Done,
         time,
         steps: collisions,
@@ -259,16 +300,17 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
 ) -> Result<(Vec<StepReport>, Snapshot, super::checks::AtThreshold), RunError> {
     sys.init_forces();
     let mut ctx = Ctx::<D>::new(scene);
+    let diameter: Vec<f64> = sys.radius.iter().map(|r| 2.0 * r).collect();
+    ctx.plan_for(&diameter)?;
     let n = ctx.stages.len();
     let stopped = run_stages(&mut ctx, sys, 0..n, None, opts)?;
     let status = if stopped {
-        "interrupted"
+        StepEnd::Interrupted
     } else {
-        "equilibrium"
+        StepEnd::Equilibrium
     };
-    let num = StageNumerics::of_scene(scene);
-    let snap = snapshot_of(sys, &scene.name, &num, status, ctx.pressure);
-    let at_threshold = contacts_at_threshold(sys, &ctx.last_numerics());
+    let snap = snapshot_of(sys, ctx.plan(), status.as_str(), ctx.pressure());
+    let at_threshold = ctx.contacts_at_threshold(sys);
     Ok((ctx.reports, snap, at_threshold))
 }
 
@@ -280,7 +322,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
     mut resume_at: Option<(f64, u64, f64, StageWatch<D>)>,
     opts: &mut RunOptions,
 ) -> Result<bool, RunError> {
-    let scene = ctx.scene;
+    let plan = ctx.plan().clone();
     let base_law = sys.law;
     let n = sys.len() as f64;
     let ke0 = sys.kinetic_energy() / n;
@@ -289,35 +331,37 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
     // The interacting pairs of the current check, one buffer for the whole run (a fresh list
     // at every check would be allocated and faulted in again each time).
     let mut inter = Vec::new();
-    let stage_count = ctx.stages.len();
+    let stage_count = plan.steps.len();
     for k in range {
-        let step = ctx.stages[k].1.clone();
-        let kind = step.kind();
-        let num = StageNumerics::of_stage(scene, &step, ctx.pressure);
+        let stage: PlanStage = *plan.steps[k].dem().expect("run_stages runs DEM stages");
+        let kind = stage.kind.name();
+        ctx.current = Some(k);
         // κ of the stage; the time step follows.
-        sys.law = base_law.with_kappa_scaled(num.kappa_factor);
-        let (dt, k_max) = num.time_step(sys);
-        sys.dt = dt;
-        ctx.dt = dt;
-        ctx.k_max = k_max;
-        match &step {
-            Step::Compress {
-                pressure: p,
-                inertia_cap,
-                ..
-            } => {
-                ctx.pressure = Some(*p);
-                // Strain-rate cap: AR07 (23) I = ε̇√(m/(aP)) (time unit √(m/(aP)) for P > 0
-                // without cohesion), GRC08 I_a = ε̇ T0 with T0 = √(m a/F0) = 1 with cohesion.
-                let time_unit = if num.cohesive { 1.0 } else { 1.0 / p.sqrt() };
+        sys.law = base_law.with_kappa_scaled(stage.kappa_factor);
+        debug_assert_eq!(
+            plan::time_step(
+                &sys.law,
+                &sys.mass,
+                &sys.radius,
+                plan.dt_fraction,
+                plan.stiffness_force
+            ),
+            (stage.dt, stage.k_max),
+            "the plan's time step is the typed law's"
+        );
+        sys.dt = stage.dt;
+        ctx.dt = stage.dt;
+        ctx.k_max = stage.k_max;
+        match stage.kind {
+            StageKind::Compress { pressure } => {
                 let mut target = D::V::zero();
                 for a in 0..D::D {
-                    target[a] = *p;
+                    target[a] = pressure;
                 }
                 sys.cell.control = Control::Stress {
                     target,
-                    rate_cap: inertia_cap / time_unit,
-                    servo: num.servo_gain,
+                    rate_cap: stage.max_strain_rate,
+                    servo: stage.servo_gain,
                 };
             }
             _ => {
@@ -325,14 +369,16 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 sys.cell.ldot = D::V::zero();
             }
         }
-        let (full_time, aggregate, max_time) = (num.full_time, num.aggregate, num.max_time);
+        let aggregate = stage.kind == StageKind::Aggregate;
+        let full_time = stage.kind == StageKind::FixedVolume { full_time: true };
+        let max_time = stage.max_time;
         let (t0, steps0, wall0, mut watch) = match resume_at.take() {
             Some(r) => r,
             None => (
                 sys.time,
                 sys.step,
                 0.0,
-                StageWatch::new(num.relax, sys.time),
+                StageWatch::new(stage.relax, sys.time),
             ),
         };
         if let Some(z) = watch.tangential_zeta() {
@@ -352,8 +398,8 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 sys.dt = f.dt();
                 sys.law = sys.law.without_normal_damping();
             }
-            for m in 0..num.check_every {
-                if m + 1 == num.check_every {
+            for m in 0..stage.check_every {
+                if m + 1 == stage.check_every {
                     prev_force.clear();
                     prev_force.extend_from_slice(&sys.force);
                     prev_torque.clear();
@@ -367,10 +413,10 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     f.after_step(sys);
                 }
                 let (ov, i, j) = sys.max_overlap;
-                if ov.is_nan() || ov > num.max_overlap {
+                if ov.is_nan() || ov > stage.max_overlap {
                     return Err(unstable(
-                        &scene.name,
-                        &num,
+                        &plan,
+                        &stage,
                         sys,
                         &last_good,
                         if ov.is_nan() {
@@ -378,14 +424,14 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                         } else {
                             format!(
                                 "overlap of {ov:.3} times the smaller radius between grains {i} and {j} (limit numerics.max_overlap = {})",
-                                num.max_overlap
+                                stage.max_overlap
                             )
                         },
                     ));
                 }
             }
             links_into(sys, &mut inter);
-            checks = measure(sys, &num, &inter);
+            checks = measure(sys, &stage, &inter);
             if let Some(cb) = opts.progress.as_mut() {
                 let stressed = matches!(sys.cell.control, Control::Stress { .. });
                 let wrapped_axes = (first_check && stressed).then(|| {
@@ -418,13 +464,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 let frame = (sys.time / d.every).floor() as u64;
                 if d.last != Some(frame) {
                     d.last = Some(frame);
-                    (d.sink)(&snapshot_of(
-                        sys,
-                        &scene.name,
-                        &num,
-                        "running",
-                        ctx.pressure,
-                    ));
+                    (d.sink)(&snapshot_of(sys, &plan, "running", stage.pressure));
                 }
             }
             // Time step past stability: the fastest modes flip sign at every step (the
@@ -440,8 +480,8 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             };
             if flips >= FLIP_CHECKS {
                 return Err(unstable(
-                    &scene.name,
-                    &num,
+                    &plan,
+                    &stage,
                     sys,
                     &last_good,
                     format!(
@@ -456,28 +496,27 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 && sys.cell.l.is_finite();
             if !finite {
                 return Err(unstable(
-                    &scene.name,
-                    &num,
+                    &plan,
+                    &stage,
                     sys,
                     &last_good,
                     "non-finite velocities, forces or cell lengths".into(),
                 ));
             }
-            // The cell may shrink below the minimum-image limit while compressing (issue 18:
-            // `count = 8` counted a pair touching through two images once, exit 0).
+            // The cell may shrink below the minimum-image limit while compressing (with
+            // `count = 8` a pair touching through two images was counted once).
             if let Err(e) = sys.check_cell() {
                 return Err(stopped(
-                    &scene.name,
-                    &num,
+                    &plan,
                     sys,
                     &last_good,
                     format!("the cell shrank during the stage: {e} (particles.count): a pair would interact through two periodic images, which the minimum-image convention counts once"),
                 ));
             }
-            if checks.kinetic_per_grain > 1e4 * (num.f_ref + ke0) {
+            if checks.kinetic_per_grain > 1e4 * (stage.f_ref + ke0) {
                 return Err(unstable(
-                    &scene.name,
-                    &num,
+                    &plan,
+                    &stage,
                     sys,
                     &last_good,
                     format!(
@@ -492,7 +531,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                     sys.time,
                     settle_view(
                         sys,
-                        &num,
+                        &stage,
                         &inter,
                         &checks,
                         watch.free_rollers(),
@@ -510,7 +549,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             }
             watch.peak_strain_rate = watch.peak_strain_rate.max(checks.strain_rate);
             // Not in stages that end otherwise than on the criteria (one cluster, full time).
-            if num.quench && !aggregate && !full_time && checks.only_kinetic_fails() {
+            if stage.quench && checks.only_kinetic_fails() {
                 watch.quench.record(
                     sys.time,
                     sys.kinetic_energy() / n,
@@ -520,7 +559,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 );
                 sys.quench();
             }
-            let held = watch.held(sys.time, checks.equilibrium(), num.window);
+            let held = watch.held(sys.time, checks.equilibrium(), stage.window);
             if aggregate && checks.clusters == 1 {
                 end = StepEnd::OneCluster;
                 break;
@@ -599,10 +638,7 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
             } else {
                 end.as_str()
             };
-            hook(
-                report,
-                &snapshot_of(sys, &scene.name, &num, status, ctx.pressure),
-            );
+            hook(report, &snapshot_of(sys, &plan, status, stage.pressure));
         }
     }
     Ok(false)
@@ -614,17 +650,19 @@ fn pair_list(inter: &[Link]) -> Vec<(u32, u32)> {
 }
 
 /// The common start of a cross-code comparison: the scene's initial grains with its leading
-/// hard-grain stages (melting, growth, expansion) applied, and the index of the first DEM
-/// stage. External codes have no event-driven dynamics, so their decks start here, from the
-/// very configuration our DEM stages start from.
-pub fn prepared_grains<D: Dim>(scene: &Scene) -> Result<(Grains<D>, usize), String> {
+/// hard-grain stages (melting, growth, expansion) applied, the plan of the run, and the index
+/// of the first DEM stage. External codes have no event-driven dynamics, so their decks start
+/// here, from the very configuration our DEM stages start from.
+pub fn prepared_grains<D: Dim>(scene: &Scene) -> Result<(Grains<D>, Plan, usize), String> {
     let mut ctx = Ctx::<D>::new(scene);
     ctx.grains = initial_grains::<D>(scene)?;
+    let diameter = ctx.grains.diameter.clone();
+    ctx.plan_for(&diameter).map_err(|e| e.to_string())?;
     let mut k = 0;
     while k < ctx.stages.len() && !ctx.stages[k].1.is_dem() {
-        let step = ctx.stages[k].1.clone();
-        hard_stage(&mut ctx, k, &step).map_err(|e| e.to_string())?;
+        hard_stage(&mut ctx, k).map_err(|e| e.to_string())?;
         k += 1;
     }
-    Ok((ctx.grains, k))
+    let plan = ctx.plan.take().expect("built above");
+    Ok((ctx.grains, plan, k))
 }

@@ -478,7 +478,7 @@ impl Step {
             Step::Compress { criteria, .. }
             | Step::FixedVolume { criteria, .. }
             | Step::PressureProgram { criteria, .. }
-            | Step::KappaRamp { criteria, .. } => criteria.clone(),
+            | Step::KappaRamp { criteria, .. } => *criteria,
             _ => Criteria::default(),
         }
     }
@@ -601,7 +601,7 @@ pub enum RelaxMethod {
 ///
 /// In a scene: `criteria = { preset = "grc07" }`, optionally with fields overriding the preset
 /// (`criteria = { preset = "ar07", force = 1e-5 }`).
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(try_from = "CriteriaTable")]
 pub struct Criteria {
     pub scale: ForceScale,
@@ -783,7 +783,7 @@ impl Scene {
                                 pressure: p,
                                 inertia_cap: *inertia_cap,
                                 max_time: *max_time,
-                                criteria: criteria.clone(),
+                                criteria: *criteria,
                                 mu: *mu,
                                 kappa: None,
                                 relax: *relax,
@@ -809,7 +809,7 @@ impl Scene {
                                 pressure: *pressure,
                                 inertia_cap: *inertia_cap,
                                 max_time: *max_time,
-                                criteria: criteria.clone(),
+                                criteria: *criteria,
                                 mu: *mu,
                                 kappa: Some(level),
                                 relax: *relax,

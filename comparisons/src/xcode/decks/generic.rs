@@ -1,8 +1,9 @@
-//! The neutral exchange format (issue 19; `docs/exchange-format.md`): the start, the cell,
-//! the law, the protocol and the criteria of a scene in plain JSON and CSV, for any DEM code.
-//! `exchange.json` (everything but the grains) and `particles.csv` (one row per grain).
+//! The neutral exchange format (`docs/exchange-format.md`): the start, the cell, the law, the
+//! protocol and the criteria of a scene in plain JSON and CSV, for any DEM code.
+//! `exchange.json` (everything but the grains) and `particles.csv` (one row per grain). Its
+//! stages are written from the engine's plan ([`super::Plan`]), field for field.
 
-use super::{num, Deck, Stage, StageKind, Start};
+use super::{num, Deck, PlanStage, StageKind, Start};
 use grainbench_engine::scene::{Criteria, Law, Mu, Numerics, Relax};
 use serde::{Deserialize, Serialize};
 
@@ -86,7 +87,7 @@ pub struct ParticlesFile {
 pub struct ExchangeStage {
     /// `compress` (isotropic stress control to `pressure`), `fixed-volume`, or `aggregate`
     /// (fixed cell until all grains form one cluster of interacting grains).
-    pub kind: String,
+    pub kind: ExchangeKind,
     /// Target pressure of `compress` (force unit / a^(d−1)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pressure: Option<f64>,
@@ -113,6 +114,15 @@ pub struct ExchangeStage {
     /// Final relaxation (background damping once the interaction list has settled), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relax: Option<Relax>,
+}
+
+/// An exchange stage's `kind`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum ExchangeKind {
+    Compress,
+    FixedVolume,
+    Aggregate,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
@@ -173,17 +183,7 @@ pub fn exchange(start: &Start) -> (Exchange, String) {
         }
         csv += &(row.join(",") + "\n");
     }
-    let dem: Vec<_> = start.scene.stages()[start.prelude.len()..]
-        .iter()
-        .filter(|(_, s)| s.is_dem())
-        .map(|(_, s)| s.criteria())
-        .collect();
-    let stages = start
-        .stages
-        .iter()
-        .zip(dem)
-        .map(|(s, criteria)| stage(s, criteria))
-        .collect();
+    let stages = start.stages.iter().map(stage).collect();
     let cohesive = start.cohesive();
     let ex = Exchange {
         format: FORMAT.into(),
@@ -238,14 +238,14 @@ pub fn exchange(start: &Start) -> (Exchange, String) {
     (ex, csv)
 }
 
-fn stage(s: &Stage, criteria: Criteria) -> ExchangeStage {
+fn stage(s: &PlanStage) -> ExchangeStage {
     let (kind, pressure, full_time) = match s.kind {
-        StageKind::Compress { pressure } => ("compress", Some(pressure), false),
-        StageKind::FixedVolume { full_time } => ("fixed-volume", None, full_time),
-        StageKind::Aggregate => ("aggregate", None, false),
+        StageKind::Compress { pressure } => (ExchangeKind::Compress, Some(pressure), false),
+        StageKind::FixedVolume { full_time } => (ExchangeKind::FixedVolume, None, full_time),
+        StageKind::Aggregate => (ExchangeKind::Aggregate, None, false),
     };
     ExchangeStage {
-        kind: kind.into(),
+        kind,
         pressure,
         max_strain_rate: s.max_strain_rate,
         max_time: s.max_time,
@@ -260,7 +260,7 @@ fn stage(s: &Stage, criteria: Criteria) -> ExchangeStage {
             stress: s.tolerances.stress,
             kinetic_per_grain: s.tolerances.kinetic_per_grain,
         },
-        criteria,
+        criteria: s.criteria,
         check_every: s.check_every,
         relax: s.relax,
     }

@@ -279,13 +279,13 @@ fn rolling_sds(
 /// on the smoke packing: a step at the cap moved σ by 0.055 at κ = 1e4); g·B·dt/P > 2 makes
 /// the box flip between two sizes every step with σ ≈ P ± 0.028 (seen), so g ≤ P/(2 κ dt) (B
 /// taken as κ/4, 4× margin on the stability bound B·g·dt/P < 2).
-fn servo_gain(pressure: f64, st: &super::Stage) -> f64 {
+fn servo_gain(pressure: f64, st: &super::PlanStage) -> f64 {
     st.servo_gain
         .unwrap_or((2.0 * st.max_strain_rate).min(pressure / (2.0 * st.kappa * st.dt)))
 }
 
 /// How the deck's comment names g.
-fn servo_gain_source(st: &super::Stage) -> &'static str {
+fn servo_gain_source(st: &super::PlanStage) -> &'static str {
     if st.servo_gain.is_some() {
         "the scene's numerics.servo_gain"
     } else {
@@ -299,7 +299,13 @@ fn servo_gain_source(st: &super::Stage) -> &'static str {
 /// every step keeps it current; defined first, it runs first at the end of the step). fix
 /// deform measures its displacement from the box at each run's start: returns the lines that
 /// record that box, to give before every `run` of the stage.
-fn servo_2021(s: &mut String, start: &Start, st: &super::Stage, k: usize, pressure: f64) -> String {
+fn servo_2021(
+    s: &mut String,
+    start: &Start,
+    st: &super::PlanStage,
+    k: usize,
+    pressure: f64,
+) -> String {
     let axes = &["x", "y", "z"][..start.dimension];
     let cols: Vec<String> = (1..=start.dimension)
         .map(|a| format!("c_pvir[{a}]"))
@@ -676,7 +682,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
 /// every criterion but the kinetic one holds; then the stage ends if the kinetic one holds too,
 /// or every velocity and spin is set to zero and the stage goes on for one check interval,
 /// judged again at its end as our engine judges its next check.
-fn quenched_stage(s: &mut String, st: &super::Stage, k: usize, rebase: &str) {
+fn quenched_stage(s: &mut String, st: &super::PlanStage, k: usize, rebase: &str) {
     let _ = write!(
         s,
         "thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k} v_q{k}\n\
@@ -718,7 +724,7 @@ fn quenched_stage(s: &mut String, st: &super::Stage, k: usize, rebase: &str) {
 fn relaxed_stage(
     s: &mut String,
     start: &Start,
-    st: &super::Stage,
+    st: &super::PlanStage,
     k: usize,
     relax: Relax,
     code: Code,

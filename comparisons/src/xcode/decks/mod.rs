@@ -1,10 +1,12 @@
 //! Cross-code decks: input decks and data files for LAMMPS, LIGGGHTS and YADE that start from
 //! the configuration our engine starts from and run the same protocol, as far as each code can
-//! express it (SPEC §2–§4, `shared/external-codes.md`).
+//! express it (the laws of AR07 §II and GRC07 §II, the protocols of AR07 §III–IV and GRC07
+//! §III; what each code can express: docs/external-codes.md).
 //!
-//! * [`Start`]: the common start (grains after the scene's leading hard-grain stages, the DEM
-//!   stages with their absolute rate caps and tolerances, the time step), in reduced units:
-//!   lengths in a, masses in the mass of a grain of diameter a, forces in the scene's unit.
+//! * [`Start`]: the common start (grains after the scene's leading hard-grain stages, and the
+//!   engine's [`Plan`]: the DEM stages with their absolute rate caps, tolerances and time
+//!   steps), in reduced units: lengths in a, masses in the mass of a grain of diameter a,
+//!   forces in the scene's unit. No generator derives a stage quantity itself.
 //! * [`capability`]: the capability matrix, one [`Support`] per [`Feature`] and [`Code`].
 //! * [`lammps`], [`liggghts`], [`yade`]: one generator per code (one style, one file).
 //! * [`lammps_table`]: a bench-only (throughput) LAMMPS deck for adhesive scenes.
@@ -21,77 +23,13 @@ pub mod yade;
 pub use super::code::{which, Code};
 pub use capability::{features, Feature, Support};
 
+pub use grainbench_engine::plan::{Plan, PlanStage, StageKind, Tolerances};
+
 use grainbench_engine::geometry::{Dim, VectorOps as _, D2, D3};
-use grainbench_engine::run::{prepared_grains, time_step_for, Grains};
-use grainbench_engine::scene::{Criteria, ForceScale, Law, Mu, Relax, Scene, Step};
+use grainbench_engine::plan::PlanStep;
+use grainbench_engine::run::{prepared_grains, Grains};
+use grainbench_engine::scene::{Law, Mu, Scene};
 use std::fmt;
-
-/// What a DEM stage asks of an external code, in absolute reduced units.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Stage {
-    pub kind: StageKind,
-    /// Largest strain rate of the cell, 1/time (AR07 (23) I·√(P/m)/a, GRC08 I_a/T0).
-    pub max_strain_rate: f64,
-    /// Time limit and the same in steps of [`Stage::dt`].
-    pub max_time: f64,
-    pub max_steps: u64,
-    pub mu: Mu,
-    /// κ of the stage (the law's unless the stage overrides it).
-    pub kappa: f64,
-    /// Time step for this κ (our engine's: `dt_fraction` of the stiffest contact duration).
-    pub dt: f64,
-    pub tolerances: Tolerances,
-    /// Steps between checks of the criteria.
-    pub check_every: u64,
-    /// Final relaxation of the stage (issue 12), if any.
-    pub relax: Option<Relax>,
-    /// Time over which the criteria must hold before the stage ends (0: one check).
-    pub window: f64,
-    /// `criteria.quench`: velocities zeroed at a check where only the kinetic criterion
-    /// fails (AR07 §III.A).
-    pub quench: bool,
-    /// The scene's first-order servo gain (`numerics.servo_gain`), if it sets one.
-    pub servo_gain: Option<f64>,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum StageKind {
-    /// Isotropic stress control to `pressure` (force unit / a^(d-1)).
-    Compress {
-        pressure: f64,
-    },
-    FixedVolume {
-        full_time: bool,
-    },
-    Aggregate,
-}
-
-/// Equilibrium criteria in absolute units (SPEC §3): force on a grain, moment, deviation of
-/// each diagonal contact stress from the target, kinetic energy per grain.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Tolerances {
-    pub force: f64,
-    pub moment: f64,
-    pub stress: f64,
-    pub kinetic_per_grain: f64,
-}
-
-impl Tolerances {
-    /// The criteria of a stage at pressure `p` (`None`: fixed cell).
-    pub fn of(c: &Criteria, p: Option<f64>) -> Tolerances {
-        let f_ref = match c.scale {
-            ForceScale::Pressure => p.unwrap_or(1.0),
-            ForceScale::Cohesion => p.unwrap_or(0.0).max(1.0),
-        };
-        // a = 1: F_ref/a^(d-1) = F_ref in reduced units.
-        Tolerances {
-            force: c.force * f_ref,
-            moment: c.moment * f_ref,
-            stress: c.pressure * f_ref,
-            kinetic_per_grain: c.kinetic * f_ref,
-        }
-    }
-}
 
 /// The common start of every code's run of a scene.
 #[derive(Clone, Debug)]
@@ -114,7 +52,10 @@ pub struct Start {
     pub prelude: Vec<String>,
     /// Hard-grain stages between DEM stages (no external code can run them: refused).
     pub interlude: Vec<String>,
-    pub stages: Vec<Stage>,
+    /// The run resolved by the engine, and its DEM stages in order (the stages every deck
+    /// runs, with the engine's numbers).
+    pub plan: Plan,
+    pub stages: Vec<PlanStage>,
     /// Steps between frames of the trace (`output.trace_every` in the first stage's time
     /// steps, at least 1), if the scene asks for one.
     pub trace_steps: Option<u64>,
@@ -178,6 +119,15 @@ impl Start {
         self.diameter.len()
     }
 
+    /// The same grains under `scene`'s protocol (which must keep the hard-grain prelude): the
+    /// plan resolved again.
+    pub fn with_scene(mut self, scene: Scene) -> Result<Start, String> {
+        self.plan = Plan::new(&scene, &self.diameter)?;
+        (self.stages, self.interlude) = after_prelude(&self.plan, self.prelude.len());
+        self.scene = scene;
+        Ok(self)
+    }
+
     /// Does any grain start spinning?
     pub fn spinning(&self) -> bool {
         self.spin.iter().flatten().any(|&w| w != 0.0)
@@ -229,70 +179,27 @@ impl Start {
     }
 }
 
-fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
-    let (grains, first_dem): (Grains<D>, usize) = prepared_grains::<D>(scene)?;
-    let stages_all = scene.stages();
-    let prelude = stages_all[..first_dem]
-        .iter()
-        .map(|(_, s)| s.kind().to_string())
-        .collect();
-    let cohesive = scene.law.cohesion().is_some();
+/// The DEM stages of `plan` from stage `first_dem` on, and the hard-grain stages among them
+/// (refused through the matrix: `hard-grain-interlude`).
+fn after_prelude(plan: &Plan, first_dem: usize) -> (Vec<PlanStage>, Vec<String>) {
     let mut stages = Vec::new();
-    let mut pressure: Option<f64> = None;
     let mut interlude = Vec::new();
-    for (_, step) in &stages_all[first_dem..] {
-        if !step.is_dem() {
-            // Refused through the matrix (`hard-grain-interlude`).
-            interlude.push(step.kind().to_string());
-            continue;
+    for step in &plan.steps[first_dem..] {
+        match step {
+            PlanStep::Dem(s) => stages.push(*s),
+            PlanStep::Hard(h) => interlude.push(h.name().to_string()),
         }
-        let kappa = step.kappa().unwrap_or(scene.law.kappa());
-        let dt = time_step_for::<D>(scene, &grains, kappa)?;
-        let (kind, cap) = match step {
-            Step::Compress {
-                pressure: p,
-                inertia_cap,
-                ..
-            } => {
-                pressure = Some(*p);
-                // AR07 (23): I = ε̇√(m/(aP)); GRC08: I_a = ε̇ T0 with T0 = 1 (cohesive units).
-                let time_unit = if cohesive { 1.0 } else { 1.0 / p.sqrt() };
-                (
-                    StageKind::Compress { pressure: *p },
-                    inertia_cap / time_unit,
-                )
-            }
-            Step::FixedVolume { full_time, .. } => (
-                StageKind::FixedVolume {
-                    full_time: *full_time,
-                },
-                0.0,
-            ),
-            Step::Aggregate { .. } => (StageKind::Aggregate, 0.0),
-            other => unreachable!("stages() unrolls {}", other.kind()),
-        };
-        let max_time = step.max_time();
-        stages.push(Stage {
-            kind,
-            max_strain_rate: cap,
-            max_time,
-            max_steps: (max_time / dt).ceil() as u64,
-            mu: scene.mu_of(step),
-            kappa,
-            dt,
-            tolerances: Tolerances::of(&step.criteria(), pressure),
-            check_every: scene.numerics.check_every,
-            relax: step.relax(),
-            window: step.criteria().window,
-            // As in our engine: not in stages that end otherwise than on the criteria.
-            quench: step.criteria().quench
-                && matches!(
-                    kind,
-                    StageKind::Compress { .. } | StageKind::FixedVolume { full_time: false }
-                ),
-            servo_gain: scene.numerics.servo_gain,
-        });
     }
+    (stages, interlude)
+}
+
+fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
+    let (grains, plan, first_dem): (Grains<D>, Plan, usize) = prepared_grains::<D>(scene)?;
+    let prelude = plan.steps[..first_dem]
+        .iter()
+        .map(|s| s.name().to_string())
+        .collect();
+    let (stages, interlude) = after_prelude(&plan, first_dem);
     let n = grains.s.len();
     let mass: Vec<f64> = grains
         .diameter
@@ -324,6 +231,7 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
             .zip(stages.first())
             .map(|(t, s)| ((t / s.dt).round() as u64).max(1)),
         stages,
+        plan,
     })
 }
 
