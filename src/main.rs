@@ -316,7 +316,8 @@ fn main() {
 /// any sizeable packing) in a mapping of its own, unmapped when freed and grown by `mremap`.
 /// By default glibc raises that threshold after the first large block is freed and then
 /// carves large arrays from the heap, which keeps what the preparation, the checks and the
-/// output freed resident for the rest of the run (issue 15: peak memory per particle).
+/// output freed resident for the rest of the run, raising the peak memory per particle
+/// (docs/performance.md).
 fn large_blocks_mapped() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: mallopt only sets an allocator parameter; called before any thread starts.

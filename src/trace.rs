@@ -1,8 +1,8 @@
-//! `run --trace-every T`: the time series of a few-body run (issue 19) — every grain's
-//! position, velocity and spin (`trace-grains.csv`) and every contact's forces
-//! (`trace-contacts.csv`) — and, for two grains, the impact they make (`impact.json`:
-//! duration, peak force, restitution, angles, spins) beside the analytic values it is checked
-//! against.
+//! `run --trace-every T`: the time series of a few-body run, for the classic two- and few-body
+//! DEM validation tests — every grain's position, velocity and spin (`trace-grains.csv`) and
+//! every contact's forces (`trace-contacts.csv`) — and, for two grains, the impact they make
+//! (`impact.json`: duration, peak force, restitution, angles, spins) beside the analytic values
+//! it is checked against.
 
 use anyhow::Result;
 use grainbench_comparisons::metrics::impact::{self, ImpactReport};

@@ -1,4 +1,4 @@
-//! Any DEM code through the exchange format and an adapter file (issue 19,
+//! Any DEM code through the exchange format and an adapter file (see
 //! docs/exchange-format.md): the reference adapter end to end in `compare`, refusals from an
 //! adapter's `supports`, a failing code, the generic deck, and the capability column.
 

@@ -396,7 +396,7 @@ fn cohesionless_2d_packing_reaches_criteria() {
     check_moduli(&a, 2);
 }
 
-/// GRC07 §II.D on an adhesive packing (issue 12): the reduced type-1 state with rolling
+/// GRC07 §II.D on an adhesive packing: the reduced type-1 state with rolling
 /// resistance (N = 400, Φ_I = 0.36, μ = 0.5, P* = 0.01) never met the force criterion under the
 /// paper's law alone (undamped rolling and tangential modes). With `relax` it ends at
 /// equilibrium, the criteria held over a 2 T0 window; the damped phase changed no interaction
@@ -745,7 +745,8 @@ fn fails(cmd: &mut assert_cmd::Command, code: i32, needles: &[&str]) {
     }
 }
 
-/// Issue 18: inputs that used to panic (exit 101) or hang now end with a clear error.
+/// Hostile inputs that could panic (exit 101) or hang end with a clear error
+/// (docs/reliability.md).
 #[test]
 fn hostile_scene_inputs_neither_panic_nor_hang() {
     let dir = tempfile::tempdir().unwrap();
@@ -956,7 +957,7 @@ criteria = { preset = "grc07" }
     );
 }
 
-/// Issue 18: an output directory is never written by two runs at once, a checkpoint is never
+/// An output directory is never written by two runs at once, a checkpoint is never
 /// overwritten without being asked, and output names cannot collide.
 #[test]
 fn output_directory_is_protected() {

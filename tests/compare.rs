@@ -337,9 +337,9 @@ fn external_dumps_export_to_paraview() {
     assert!(pvd.contains("particles.vtu") && pvd.contains("contacts.vtu"));
 }
 
-/// Issue 18: a dump cut at a line end, or holding a NaN, used to analyse with exit 0 to a
-/// wrong z (2.109 instead of 4.453 for the LAMMPS fixture cut to 300 lines). Now each is an
-/// exit-2 error naming the file, the line and what was expected.
+/// A dump cut at a line end, or holding a NaN, must not analyse with exit 0 to a wrong z
+/// (2.109 instead of 4.453 for the LAMMPS fixture cut to 300 lines): each is an exit-2 error
+/// naming the file, the line and what was expected.
 #[test]
 fn damaged_external_dumps_are_refused() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

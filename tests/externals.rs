@@ -1,4 +1,4 @@
-//! Cross-code smoke tests (issues 4 and 14): the small 3D frictional scene `xcode-smoke` (N = 256,
+//! Cross-code smoke tests: the small 3D frictional scene `xcode-smoke` (N = 256,
 //! κ = 1e4, μ = 0.3, AR07 criteria) in our engine, LAMMPS (2021 and 2025), LIGGGHTS and YADE
 //! from the same start, the 2D cohesive smoke scenes in ours and LAMMPS, and the 3D cohesive
 //! smoke scenes in ours and LIGGGHTS (SJKR) or YADE (DMT), through `grainbench compare`. Asserts that every run ends at
@@ -25,7 +25,7 @@ fn smoke_scene_agrees_across_codes() {
     );
 }
 
-/// Cohesive smoke (issue 14): `xcode-cohesive-smoke`, 2D GRC07 type-1 adhesive disks (N = 200,
+/// Cohesive smoke: `xcode-cohesive-smoke`, 2D GRC07 type-1 adhesive disks (N = 200,
 /// κ = 1e4, μ = 0.5, P* = 0.01, final relaxation) in our engine and LAMMPS 2025 (GRC07
 /// attraction by `lepton/sphere`, exact). The contact stress must meet the GRC07 stress
 /// criterion (1e-4 F0/a) in both, Φ, z*, z and x0 must agree within the bands of
@@ -41,7 +41,7 @@ fn cohesive_smoke_scene_agrees_with_lammps_2025() {
     );
 }
 
-/// Cohesive smoke with diameters in 5 classes (issue 14): `xcode-cohesive-classes-smoke` in our
+/// Cohesive smoke with diameters in 5 classes: `xcode-cohesive-classes-smoke` in our
 /// engine and LAMMPS 2021, whose GRC07 attraction is one `pair_style table` per pair of classes
 /// (exact to 1e-7 F0, comparisons/tests/lammps_two_particle.rs) and whose stress control is a
 /// `fix deform` servo. Same checks and bands (golden/xcode-bands.toml) as above; LAMMPS 2021
@@ -57,7 +57,7 @@ fn cohesive_classes_smoke_scene_agrees_with_lammps_2021() {
     );
 }
 
-/// Cohesive smoke with rolling resistance (issue 14): `xcode-cohesive-rr-smoke`, the classes
+/// Cohesive smoke with rolling resistance: `xcode-cohesive-rr-smoke`, the classes
 /// scene with K_r and μ_r (`rolling sds` per pair of classes in LAMMPS, its moment ours to 7e-5 in
 /// comparisons/tests/lammps_two_particle.rs), run by all three with LAMMPS's stress control
 /// (the first-order servo, `numerics.servo_gain`) and velocities (`affine_velocity = false`):
@@ -74,7 +74,7 @@ fn cohesive_rr_smoke_scene_agrees_with_lammps_2021() {
     );
 }
 
-/// SJKR cohesive smoke (issue 14): `xcode-sjkr-smoke`, 3D frictionless Hertz spheres with
+/// SJKR cohesive smoke: `xcode-sjkr-smoke`, 3D frictionless Hertz spheres with
 /// LIGGGHTS's own cohesion law (`cohesion sjkr`, attraction k·πa² in contact; ours is
 /// engine/src/contact/sjkr.rs, equal to LIGGGHTS's force to 1e-15 in
 /// comparisons/tests/liggghts_two_particle.rs) in our engine and LIGGGHTS. Same checks, bands of
@@ -90,7 +90,7 @@ fn sjkr_smoke_scene_agrees_with_liggghts() {
     );
 }
 
-/// DMT cohesive smoke (issue 14): `xcode-dmt-smoke`, 3D frictionless Hertz spheres with YADE's
+/// DMT cohesive smoke: `xcode-dmt-smoke`, 3D frictionless Hertz spheres with YADE's
 /// own adhesion (`includeAdhesion`, a constant pull 4πR*γ in contact; ours is
 /// engine/src/contact/dmt.rs, equal to YADE's force to 6e-7 in
 /// comparisons/tests/yade_two_particle.rs) in our engine and YADE, at κ = 1e3 and twice our

@@ -1,5 +1,5 @@
-//! The two-sphere impact tests of the DEM validation literature from the command line (issue
-//! 19): `run --trace-every` on the explicit-particle scenes `impact-normal` and
+//! The two-sphere impact tests of the DEM validation literature from the command line:
+//! `run --trace-every` on the explicit-particle scenes `impact-normal` and
 //! `impact-oblique`, against Hertz's elastic impact and the impulse balance of an impact that
 //! slides throughout.
 
@@ -164,7 +164,7 @@ fn peaks(path: &std::path::Path) -> std::collections::BTreeMap<(usize, usize), f
     out
 }
 
-/// A few-body trace in every code (issue 19): Newton's cradle of three Hertz spheres. Every
+/// A few-body trace in every code: Newton's cradle of three Hertz spheres. Every
 /// code's trace carries both contacts (LAMMPS and LIGGGHTS dump them each frame, YADE lists
 /// them in trace.txt), with the peak force of each within 0.1 % of ours; our run conserves
 /// momentum and energy (ζ = 0). Under CI every code must run.
@@ -215,7 +215,7 @@ fn chain_impact_in_every_code_traces_both_contacts() {
     assert!((e / 5e-5 - 1.0).abs() < 1e-3, "energy {e}");
 }
 
-/// Grains that start spinning (issue 19, explicit-particle scenes): `impact-spin` hits head-on
+/// Grains that start spinning (explicit-particle scenes): `impact-spin` hits head-on
 /// two spheres spinning about z and y, so the contact points slip at 5 v_n. Every code (and
 /// pydem, through the exchange format) starts from the scene's spins and ends with each spin
 /// changed by the sliding impulse balance, μ J_n R/I = 0.015 — to 1e-3 here, as the line of

@@ -1,5 +1,6 @@
-//! Packing metrics on snapshots from grainbench or any other DEM code (SPEC §5), the
-//! cross-code comparison with LAMMPS, LIGGGHTS and YADE, and the reports.
+//! Packing metrics on snapshots from grainbench or any other DEM code (those of AR07 §III–§IV,
+//! GRC07 §III–§V and GRC08), the cross-code comparison with LAMMPS, LIGGGHTS and YADE, and the
+//! reports.
 //!
 //! A [`Snapshot`](grainbench_engine::snapshot::Snapshot) (format in `docs/snapshot-format.md`)
 //! is measured by [`metrics::analyze`] into an [`Analysis`]: solid fraction Φ, force-carrying

@@ -415,7 +415,7 @@ fn unequal_disks(
     st
 }
 
-/// GRC07 adhesive law (issue 14) in LAMMPS 2025: `hybrid/overlay granular lepton/sphere`, two
+/// GRC07 adhesive law (4)–(5) in LAMMPS 2025: `hybrid/overlay granular lepton/sphere`, two
 /// unequal disks (d = 1 and 0.6) at rest at overlaps and gaps across the attraction range and
 /// approaching at v: the total normal force is ours (K_N δ + 2ζ√(m* K_N)·v − F0 in contact,
 /// −F0(1 − h/D0) for 0 ≤ h ≤ D0, nothing beyond), to 1e-9 F0.
@@ -551,7 +551,7 @@ criteria = {{ preset = "grc07" }}
     assert!(rel(t2, want) < 1e-3, "T {t2} vs {want}");
 }
 
-/// GRC07 rolling resistance (issue 14) as `rolling sds` per pair of diameter classes, both
+/// GRC07 rolling resistance (9)–(10) as `rolling sds` per pair of diameter classes, both
 /// LAMMPS versions: two heavy disks (d = 1 and 0.6, two atom types) in contact, spun in pure
 /// rolling (ω_1 R_1 = −ω_2 R_2: no slip, so no tangential force) for k steps. The moment on disk
 /// 2 is our law's, K_r·θ with θ the relative rotation, to 1e-3; with a small μ_r it is capped at

@@ -118,7 +118,7 @@ impl<D: Dim> Cell<D> {
 
 /// `x` limited to [−cap, cap]; NaN when the cap is NaN or negative (a cell length gone
 /// non-finite or negative), so that the run's stability check stops it with its message
-/// instead of `f64::clamp` panicking (issue 18: `pressure = 1e20`).
+/// instead of `f64::clamp` panicking (`pressure = 1e20` blows the cell up; docs/reliability.md).
 #[inline]
 fn capped(x: f64, cap: f64) -> f64 {
     if cap >= 0.0 {
@@ -146,8 +146,8 @@ mod tests {
 
     /// The servo's rate is g·(σ_αα − P)/P on the contact stress, at most the cap, whatever
     /// the rate before (no cell mass); AR07 (7) instead accelerates the cell from its rate.
-    /// A cell length gone NaN or negative leaves NaN rates for the stability check to report;
-    /// it used to panic in `f64::clamp` (issue 18).
+    /// A cell length gone NaN or negative leaves NaN rates for the stability check to report,
+    /// not a panic in `f64::clamp` (docs/reliability.md).
     #[test]
     fn kick_on_a_broken_cell_gives_nan_not_a_panic() {
         let total = [[1.0; 3]; 3];

@@ -216,7 +216,8 @@ mod tests {
         assert_eq!(class_diameter(4, 5, 0.5), 1.0);
     }
 
-    /// Issue 18 (tests/fuzz.rs): `packing_fraction = 1e-300` overflowed `m.pow(d)` for the grid.
+    /// A dilute gas (`packing_fraction = 1e-300`, from tests/fuzz.rs) must not overflow
+    /// `m.pow(d)` when sizing the grid.
     #[test]
     fn a_dilute_gas_gets_a_small_grid() {
         for phi in [1e-300, 1e-9] {

@@ -4,7 +4,7 @@
 //! worker, so a pass cut into one piece per thread gives each thread the same grains and pairs
 //! at every step. Left to split adaptively into many small pieces, work stealing moved them
 //! between cores from pass to pass: two threads on the dense N = 4000 AR07 D took 9.3–16.5 s
-//! for 40 000 steps against 14.1–14.6 s on one (docs/performance.md, issue 15). The per-grain
+//! for 40 000 steps against 14.1–14.6 s on one (docs/performance.md). The per-grain
 //! passes are cut by grains, the force pass by listed pairs.
 //!
 //! Only the cutting changes with the thread count: the fixed chunks inside each piece, and the

@@ -278,7 +278,7 @@ impl Snapshot {
     /// an interrupted write never leaves a truncated file in place of a good one.
     pub fn write(&self, path: &Path) -> Result<(), SnapshotError> {
         // Streamed into the file: the JSON text of a large packing (≈ 1 KB a grain) is never
-        // held in memory (issue 15, peak memory).
+        // held in memory, where it would add to a run's peak memory (docs/performance.md).
         let mut invalid = None;
         let written = write_atomic_with(path, |w| {
             serde_json::to_writer(&mut *w, self).map_err(|e| {
@@ -426,8 +426,8 @@ mod tests {
         assert!(e.contains(field), "{e:?} should name {field:?}");
     }
 
-    /// Issue 18: values no packing can have are refused, naming the field, instead of
-    /// analysing to nonsense.
+    /// Values no packing can have are refused, naming the field, instead of analysing to
+    /// nonsense (docs/reliability.md).
     #[test]
     fn impossible_values_are_refused_naming_the_field() {
         valid().check().unwrap();

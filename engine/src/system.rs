@@ -186,9 +186,9 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
 
     /// Frees what only stepping uses (per-pair forces, net forces and moments, displacements,
     /// inverse masses, the list's transposed index) once a run is over, so that the final
-    /// snapshot is built beside a smaller system (issue 15, peak memory). Positions,
-    /// velocities, the list with its history, the virials and [`System::interactions`] stay;
-    /// [`System::step`] refuses to run afterwards.
+    /// snapshot is built beside a smaller system and the run's peak memory stays lower
+    /// (docs/performance.md). Positions, velocities, the list with its history, the virials and
+    /// [`System::interactions`] stay; [`System::step`] refuses to run afterwards.
     pub(crate) fn shed_step_buffers(&mut self) {
         self.shed = true;
         self.pair_force = Vec::new();
@@ -295,7 +295,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
         self.max_disp = maxd.sqrt();
     }
 
-    /// Background damping of a relaxation (engine/src/relax.rs): peculiar velocities and
+    /// Background damping of a relaxation (engine/src/run/relax.rs): peculiar velocities and
     /// spins multiplied by `factor` = e^{−γ dt}, once per step after the closing kick.
     pub fn damp(&mut self, factor: f64) {
         for u in &mut self.u {

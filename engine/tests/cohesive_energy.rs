@@ -1,5 +1,5 @@
-//! Exact verification that the adhesive linear law of GRC07 §II.A–B (SPEC §1.2) is integrated
-//! without error (issue 12, first bullet).
+//! Exact verification that the adhesive linear law of GRC07 §II.A–B is integrated without
+//! error.
 //!
 //! With no normal dashpot (ζ = 0), no tangential or rolling dashpot (ζ_t = 0) and sliders that
 //! never reach their thresholds, the law is conservative. Per contact (h < 0) it stores

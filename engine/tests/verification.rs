@@ -1,5 +1,5 @@
 //! Verification of the contact laws and of the integrator against exact solutions
-//! (SPEC §1; AR07 §II.A and App. A; GRC07 §II.B).
+//! (AR07 §II.A and App. A; GRC07 §II.B).
 //!
 //! Every test runs the real engine (`System::step`) on two to a few hundred grains in a large,
 //! fixed periodic cell and compares with a closed-form or independently integrated reference.
@@ -319,7 +319,7 @@ fn adhesive_pair_settles_at_equilibrium_overlap() {
     assert!(sys.u[0].norm() <= ulp * SIDE / sys.dt && sys.u[1].norm() <= ulp * SIDE / sys.dt);
 }
 
-/// Separation threshold V*√2 (SPEC §1.2, GRC07). Start at zero gap, receding at v: out of
+/// Separation threshold V*√2 (GRC07 (7)). Start at zero gap, receding at v: out of
 /// contact the law is purely conservative (no viscosity, GRC07 (4)), so ζ plays no part and
 /// energy decides: (1/2) m* v² against the work ∫₀^{D0} F0(1 − h/D0) dh = F0 D0/2, with
 /// m* = 1/2 for two unit masses, gives v* = √(2 F0 D0) = V*√2, V* = √(F0 D0/m), exactly.

@@ -1,6 +1,6 @@
 //! `grainbench bench --memory N1,N2,…`: peak resident memory per particle of a whole
-//! `grainbench run` (issue 15: ≤ 1 KiB per particle, preparation included) on dense 3D
-//! Hertz–Mindlin packings of growing size.
+//! `grainbench run`, preparation included (the target is ≤ 1 KiB per particle,
+//! docs/performance.md), on dense 3D Hertz–Mindlin packings of growing size.
 //!
 //! Each size is the random packing of `--scale` (≤ 1000 spheres compressed fast, tiled
 //! k×k×k), written as the start snapshot of a scene that runs AR07 D's last stage for a

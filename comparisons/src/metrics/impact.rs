@@ -1,4 +1,4 @@
-//! Two-body impacts (issue 19, the classic DEM validation tests): from a time series of
+//! Two-body impacts (the classic DEM validation tests): from a time series of
 //! snapshots of two grains, the contact duration, the peak normal force, the normal and
 //! tangential coefficients of restitution, the incidence and rebound angles and the spins;
 //! and the analytic values they are checked against — Hertz's elastic impact and the impulse

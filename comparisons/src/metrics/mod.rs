@@ -1,5 +1,6 @@
-//! Packing metrics of one snapshot (SPEC §5): Φ, z, rattlers, z*, x_k, force moments,
-//! friction mobilisation, and the exact pressure/force relations AR07 (22), GRC07 (17)–(18).
+//! Packing metrics of one snapshot (AR07 §III–§IV, GRC07 §III–§IV): Φ, z, rattlers, z*, x_k,
+//! force moments, friction mobilisation, and the exact pressure/force relations AR07 (22),
+//! GRC07 (17)–(18).
 //!
 //! # Which contacts count
 //!

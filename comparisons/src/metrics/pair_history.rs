@@ -1,4 +1,4 @@
-//! The contacts of a few-body trace (issue 19), pair by pair: when each was closed and the
+//! The contacts of a few-body trace, pair by pair: when each was closed and the
 //! largest normal force it carried — what `compare` checks across codes for a traced scene of
 //! more than two grains (two grains: [`super::impact`]).
 

@@ -739,7 +739,7 @@ fn odd_snapshots_do_not_panic() {
     assert!(value(&v, "xk2_II").is_none() && value(&v, "mean_N").is_none());
     let _ = crate::report::to_markdown(&a);
 
-    // Refused by `Snapshot::check` (issue 18), but `analyze` must not panic on it either.
+    // Refused by `Snapshot::check`, but `analyze` must not panic on it either.
     let zero = super::fixtures::unchecked_snapshot(
         vec![6.0; 3],
         vec![0.0; 200],

@@ -1,5 +1,5 @@
 //! `report.html`: a self-contained page of a command's Markdown report with its plots inlined
-//! as SVG (issue 19), for people who would rather look than read; one file to open or attach.
+//! as SVG, for people who would rather look than read; one file to open or attach.
 
 use pulldown_cmark::{html, Options, Parser};
 use std::path::{Path, PathBuf};

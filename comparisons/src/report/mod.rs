@@ -2,7 +2,7 @@
 //!
 //! * [`analysis`]: markdown table and JSON renderings of an [`Analysis`](crate::Analysis).
 //! * [`mod@format`]: the number formats of every table.
-//! * [`paper`]: the published values of `golden/paper-values.toml` (SPEC §6).
+//! * [`paper`]: the published values of `golden/paper-values.toml` (AR07, GRC07, GRC08).
 //! * [`reproduction`]: our values over seeds against the published ones, with verdicts.
 //! * [`plots`]: P(f) with the DTS fit, g(r) and generic line plots as SVG + PNG.
 //! * [`html`]: `report.html`, a Markdown report with its plots inlined.

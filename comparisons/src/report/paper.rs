@@ -1,4 +1,5 @@
-//! Published values to reproduce, loaded from `golden/paper-values.toml` (SPEC §6).
+//! Published values to reproduce (the tables of AR07, GRC07 and GRC08, and a few values from
+//! their text and figures), loaded from `golden/paper-values.toml`.
 //!
 //! The file is embedded at compile time and parsed once. It holds one table per state
 //! (`ar07-D`, `grc07-type1-phi036-mu05`, …), each with its metric values: the paper's mean, the

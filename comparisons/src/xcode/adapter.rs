@@ -1,4 +1,4 @@
-//! Adapter files: any DEM code in the harness (issue 19). A TOML file says how to run the
+//! Adapter files: any DEM code in the harness. A TOML file says how to run the
 //! code on an exchange directory (`docs/exchange-format.md`), how to print its version and
 //! which features of the capability matrix it supports; `--codes NAME=PATH.toml` then lets
 //! `compare`, `bench`, `golden` and `capabilities` use it like the built-in codes.

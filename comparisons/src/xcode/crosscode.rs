@@ -134,14 +134,14 @@ pub struct Comparison {
     pub pairs: Vec<CodePairs>,
 }
 
-/// One code's contacts over a few-body trace (issue 19).
+/// One code's contacts over a few-body trace.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct CodePairs {
     pub code: String,
     pub pairs: Vec<PairHistory>,
 }
 
-/// One code's two-body impact against the analytic values (issue 19).
+/// One code's two-body impact against the analytic values.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct CodeImpact {
     pub code: String,

@@ -1,4 +1,7 @@
-//! Cross-code comparison: the same scene run by LAMMPS, LIGGGHTS and YADE (SPEC §2–§4).
+//! Cross-code comparison: the same scene run by LAMMPS, LIGGGHTS and YADE — the
+//! stress-controlled periodic cell (AR07 §II.B, GRC07 §II.A), the equilibrium criteria (AR07
+//! §III, GRC07 §II.D) and the assembling procedures (AR07 §III–§IV, GRC07 §III), as far as
+//! each code can express them (`docs/external-codes.md`).
 //!
 //! * [`code`]: the [`Code`] enum (one per DEM code) and executable lookup.
 //! * [`adapter`]: adapter files, for any code reading the neutral exchange format.

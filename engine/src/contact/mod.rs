@@ -105,9 +105,9 @@ pub trait ContactLaw<D: Dim>: Copy + Send + Sync + std::fmt::Debug + 'static {
     /// κ ramps); `factor = 1` returns the law unchanged, bit for bit.
     fn with_kappa_scaled(&self, factor: f64) -> Self;
     /// The same law with tangential and rolling dashpots of `zeta_t` (fraction of critical;
-    /// the final relaxation of a stage, engine/src/relax.rs). Laws without them (Hertz–Mindlin,
-    /// AR07 §II.A has no tangential viscosity) return themselves; the scene validator refuses
-    /// `relax.tangential_zeta` > 0 for them.
+    /// the final relaxation of a stage, engine/src/run/relax.rs). Laws without them
+    /// (Hertz–Mindlin, AR07 §II.A has no tangential viscosity) return themselves; the scene
+    /// validator refuses `relax.tangential_zeta` > 0 for them.
     fn with_tangential_damping(&self, _zeta_t: f64) -> Self {
         *self
     }

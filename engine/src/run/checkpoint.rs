@@ -4,7 +4,7 @@
 //! neighbour list and contact history). Binary (bincode), written atomically, so an
 //! interrupted write leaves the previous checkpoint intact, and closed by a CRC-32 of all the
 //! bytes before it (since version 4), so a damaged file is refused instead of resuming a
-//! different packing (issue 18). Version 5: the stage watch keeps the pressures of
+//! different packing (docs/reliability.md). Version 5: the stage watch keeps the pressures of
 //! `relax.mean_stress`. Version 6: the stage watch logs the quenches of `criteria.quench` and
 //! the step reports say what they did. Version 7: the stage watch keeps FIRE's state
 //! (`relax.method = "fire"`). Older checkpoints are refused by their version, not misread.
@@ -98,7 +98,7 @@ impl Checkpoint {
     /// Writes header and payload atomically, streamed: the bytes are those of
     /// `bincode::serialize(&(header, encode(payload)))` and its CRC, but neither the encoded
     /// state nor the file is assembled in memory (a copy of the state would double the peak
-    /// memory of a large run at every checkpoint; issue 15).
+    /// memory of a large run at every checkpoint).
     pub fn write<P: Serialize>(path: &Path, header: &Header, payload: &P) -> std::io::Result<()> {
         let len = bincode::serialized_size(payload).map_err(std::io::Error::other)?;
         crate::snapshot::write_atomic_with(path, |w| {
@@ -171,8 +171,8 @@ mod tests {
         }
     }
 
-    /// Issue 18: one damaged byte anywhere, or a cut file, is refused as damaged; it used to
-    /// resume a different packing.
+    /// One damaged byte anywhere, or a cut file, is refused as damaged, never resumed as a
+    /// different packing.
     #[test]
     fn damaged_checkpoints_are_refused() {
         let dir = tempfile::tempdir().unwrap();

@@ -1,6 +1,7 @@
 //! FIRE, the fast inertial relaxation engine (Bitzek, Koskinen, Gähler, Moseler and Gumbsch,
 //! Phys. Rev. Lett. 97, 170201 (2006)), as the final phase of a frictionless stage
-//! (`relax = { method = "fire", … }`, issue 15).
+//! (`relax = { method = "fire", … }`), to shorten the time to the criteria
+//! (docs/performance.md).
 //!
 //! AR07 §III.A: "configurations of rigid, frictionless, non-adhesive spherical particles in
 //! stable equilibrium under an isotropic confining pressure are those that realize a local

@@ -1,4 +1,4 @@
-//! Explicit-particle starts (issue 19): the grains of a scene listed in a CSV file
+//! Explicit-particle starts: the grains of a scene listed in a CSV file
 //! (`initial.particles`, `initial.cell`), for two- and few-body tests and for starts
 //! written by other programs (the exchange format's `particles.csv`).
 

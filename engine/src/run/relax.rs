@@ -1,4 +1,4 @@
-//! Final relaxation of a DEM stage and the windowed equilibrium test (issue 12).
+//! Final relaxation of a DEM stage and the windowed equilibrium test.
 //!
 //! GRC07's adhesive law damps only the normal relative velocity of touching grains, so the
 //! rolling and tangential modes of one-contact grains, chains and loops (uncoupled from the

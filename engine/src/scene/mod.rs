@@ -92,7 +92,7 @@ pub struct Particles {
     /// Diameter classes: `K` ≥ 2 equally spaced diameters from `min_diameter` to 1, each grain
     /// drawn uniformly among them (absent: uniform in [min_diameter, 1]). LAMMPS 2021 writes the
     /// GRC07 attraction as one `pair_style table` per pair of atom types, exact only when the
-    /// diameters come in classes (issue 14).
+    /// diameters come in classes (docs/external-codes.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub classes: Option<usize>,
 }
@@ -257,12 +257,12 @@ pub struct Initial {
     /// --start` to time every code on the same dense packing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub snapshot: Option<PathBuf>,
-    /// Start instead from the grains listed in this CSV file (issue 19, explicit-particle
-    /// scenes): a header naming the columns `x`, `y`, (`z`,) `diameter`, optionally velocities
-    /// `vx`, `vy`, (`vz`,) and spins `w` (2D) or `wx`, `wy`, `wz` (3D), in any order, other
-    /// columns ignored; one row per grain, positions in [0, L)
-    /// (wrapped if not), lengths in a. Needs `cell`; `particles.count` and `dimension` must
-    /// match it; a relative path is taken from the working directory.
+    /// Start instead from the grains listed in this CSV file (explicit-particle scenes: two-
+    /// and few-body tests, starts written by other programs): a header naming the columns
+    /// `x`, `y`, (`z`,) `diameter`, optionally velocities `vx`, `vy`, (`vz`,) and spins `w`
+    /// (2D) or `wx`, `wy`, `wz` (3D), in any order, other columns ignored; one row per grain,
+    /// positions in [0, L) (wrapped if not), lengths in a. Needs `cell`; `particles.count` and
+    /// `dimension` must match it; a relative path is taken from the working directory.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub particles: Option<PathBuf>,
     /// The same grains listed in the scene itself, one table per grain with the columns of a
@@ -531,7 +531,7 @@ impl Step {
     }
 }
 
-/// Final relaxation of a DEM stage (issue 12; engine/src/relax.rs): once the interaction list
+/// Final relaxation of a DEM stage (engine/src/run/relax.rs): once the interaction list
 /// has been unchanged for `settle_time` with the kinetic and stress criteria met (to
 /// `settle_factor`), the peculiar velocities
 /// and spins are damped at rate `damping` (v ← v e^{−γ dt} each step) and, when
@@ -733,7 +733,7 @@ pub struct Output {
     pub snapshot: String,
     /// Record every grain (and, for two grains, their impact) at least this often in
     /// simulated time, in our engine (`run` as with `--trace-every`) and in every code's deck
-    /// (issue 19; few-body scenes of at most [`MAX_TRACE_GRAINS`] grains).
+    /// (few-body scenes of at most [`MAX_TRACE_GRAINS`] grains).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trace_every: Option<f64>,
 }

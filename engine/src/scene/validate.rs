@@ -6,7 +6,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 /// Largest `numerics.check_every`: a stop request is honoured within this many steps
-/// (issue 18: 1e10 hung the run, deaf to SIGTERM).
+/// (with 1e10 the run would not stop on SIGTERM; docs/reliability.md).
 pub const MAX_CHECK_EVERY: u64 = 10_000;
 
 /// Files a run writes beside its snapshot in the output directory.
@@ -640,7 +640,7 @@ mod tests {
     #[test]
     fn valid_scene_parses_with_presets() {
         let s = Scene::from_toml(BASE, Path::new("s.toml")).unwrap();
-        // The scene asks for the criteria to hold over a 2 T0 window (issue 12).
+        // The scene asks for the criteria to hold over a 2 T0 window (`criteria.window`).
         assert_eq!(
             s.protocol[0].criteria(),
             Criteria {
@@ -667,7 +667,7 @@ mod tests {
         }
     }
 
-    /// Issue 18: a tiny `min_diameter` is accepted, with a word on what it costs.
+    /// A tiny `min_diameter` is accepted, with a word on what it costs.
     #[test]
     fn a_tiny_min_diameter_is_warned_about() {
         let s = Scene::from_toml(BASE, Path::new("s.toml")).unwrap();

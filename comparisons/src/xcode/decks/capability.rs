@@ -1,7 +1,7 @@
 //! The capability matrix: for each scene feature and each code, `exact`, `approximate` (with
 //! the deviation) or `unsupported` (with what is missing). Entries marked exact are checked by
 //! a two-particle deck test per code (`tests/externals.rs`); the sources are the codes'
-//! manuals and the observations in `shared/external-codes.md`.
+//! manuals and the observations in `docs/external-codes.md`.
 
 use super::lammps_table::Classes;
 use super::{Code, StageKind, Start};
@@ -98,13 +98,14 @@ pub enum Feature {
     MultiStage,
     /// Equilibrium criteria on forces, stress and kinetic energy (AR07 §III, GRC07 §II.D).
     EquilibriumCriteria,
-    /// Background damping once the interaction list has settled (`relax`, issue 12).
+    /// Background damping once the interaction list has settled (`relax`: GRC07's law alone
+    /// leaves rolling and tangential modes undamped; engine/src/run/relax.rs).
     FinalRelaxation,
     /// The relaxation's switch on the pressure averaged over `settle_time`
     /// (`relax.mean_stress`, GRC08 pressure programs).
     RelaxMeanStress,
     /// FIRE in place of the damping after the switch (`relax.method = "fire"`, frictionless
-    /// stages, issue 15).
+    /// stages).
     FireRelaxation,
     /// Velocities and spins set to zero at a check where only the kinetic criterion fails
     /// (`criteria.quench`, AR07 §III.A).

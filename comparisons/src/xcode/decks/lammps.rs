@@ -1,5 +1,5 @@
 //! LAMMPS deck generator for Debian's LAMMPS 29 Sep 2021 (`lammps`) and the current release,
-//! 22 Jul 2025 Update 4 (`lammps-2025`), GRANULAR package (`shared/external-codes.md`). The two
+//! 22 Jul 2025 Update 4 (`lammps-2025`), GRANULAR package (`docs/external-codes.md`). The two
 //! decks differ only in the normal dashpot's `damping` sub-model ([`damping`]).
 //!
 //! Files: `in.lammps` (input script) and `data.lammps` (atoms, `atom_style sphere`). Run as
@@ -897,7 +897,7 @@ mod tests {
         Start::of(&scene).unwrap()
     }
 
-    /// Adhesive scene (issue 14): LAMMPS 2025 gets the exact GRC07 attraction by lepton/sphere,
+    /// Adhesive scene: LAMMPS 2025 gets the exact GRC07 attraction by lepton/sphere,
     /// a capped deform/pressure servo and the relaxation loop; LAMMPS 2021 refuses it.
     #[test]
     fn adhesive_deck_overlays_lepton_and_relaxes() {

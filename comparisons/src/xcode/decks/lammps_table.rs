@@ -1,7 +1,7 @@
 //! GRC07 attraction (−F0 in contact, −F0(1 − g/D0) over a gap g < D0) as LAMMPS
 //! `pair_style table` sections, one per pair of diameter classes (atom types): `pair_style
 //! table` sees only r and the types, so the law is exact only when the diameters come in
-//! classes (`particles.classes`, issue 14). The tables are laid out so that LAMMPS's `linear`
+//! classes (`particles.classes`). The tables are laid out so that LAMMPS's `linear`
 //! interpolation is exact to ~1e-7 F0 ([`tables`]).
 //!
 //! Users: the LAMMPS 2021 deck of an adhesive class scene ([`super::lammps`], with [`Classes::of`])

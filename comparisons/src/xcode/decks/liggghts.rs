@@ -1,4 +1,4 @@
-//! LIGGGHTS 3.8.0 deck generator (`shared/external-codes.md`).
+//! LIGGGHTS 3.8.0 deck generator (`docs/external-codes.md`).
 //!
 //! * Law: `pair_style gran model hertz tangential history tangential_damping on` with
 //!   `youngsModulus` E = Ẽ(1−ν²) (LIGGGHTS's Y* = E/(2(1−ν²)) for identical materials, so its

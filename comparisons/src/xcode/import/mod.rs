@@ -278,8 +278,8 @@ pub fn assemble(raw: Raw, meta: &Meta) -> Result<Snapshot, String> {
     Ok(snap)
 }
 
-/// What `deck.json` promises against what the dumps hold (issue 18: a deck.json saying 2D for
-/// 3D dumps, or μ = 0 for frictional ones, silently changed the result). The grain count is
+/// What `deck.json` promises against what the dumps hold (a deck.json saying 2D for 3D dumps,
+/// or μ = 0 for frictional ones, would silently change the result). The grain count is
 /// checked by each reader.
 fn check_against_deck(raw: &Raw, meta: &Meta) -> Result<(), String> {
     if meta.dimension == 2 {
@@ -488,7 +488,7 @@ fn dump_frame(
                 }
                 sec.rows.push(v);
             }
-            // Issue 18: a dump cut at a line end used to import silently (z halved).
+            // Without this check a dump cut at a line end would import silently (z halved).
             let Some((count, at)) = promised else {
                 return Err(ImportError::new(
                     path,

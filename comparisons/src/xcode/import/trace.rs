@@ -1,4 +1,4 @@
-//! Reader of the trace a deck writes when its scene sets `output.trace_every` (issue 19): every
+//! Reader of the trace a deck writes when its scene sets `output.trace_every`: every
 //! so many steps each grain's position, velocity, spin and net force —
 //!
 //! * LAMMPS and LIGGGHTS: `trace.atoms`, a multi-frame `dump custom` with columns `id radius

@@ -322,7 +322,7 @@ mod tests {
         assert!(e.contains("line 1") && e.contains("id 7"), "{e}");
     }
 
-    /// Issue 18: a file cut at a line end, or one whose footer disagrees, is refused.
+    /// A file cut at a line end, or one whose footer disagrees, is refused.
     #[test]
     fn a_table_cut_short_is_refused() {
         let dir = tempfile::tempdir().unwrap();
