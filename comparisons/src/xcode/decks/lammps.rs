@@ -501,7 +501,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
          fix integ all nve/sphere{disc}\n\
          {e2d}\
          \n\
-         # Equilibrium measures (SPEC §3, as our engine's): largest net force and torque on a\n\
+         # Equilibrium measures (AR07 §III, GRC07 §II.D, as our engine's): largest net force and torque on a\n\
          # grain, diagonal virial stress (compressive positive, force/a^(d-1)), kinetic energy\n\
          # per grain: translation of all grains, rotation of grains with a contact (I = {inertia} m r²).\n\
          compute pvir all pressure NULL virial\n\
