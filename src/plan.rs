@@ -4,7 +4,7 @@
 use crate::common::load_scene;
 use anyhow::Result;
 use grainbench_engine::plan::{HardStage, Plan, PlanStage, PlanStep, StageKind};
-use grainbench_engine::scene::Mu;
+use grainbench_engine::scene::{Mu, Relax, RelaxMethod};
 
 /// `grainbench plan`.
 pub fn plan_command(spec: &str, json: bool) -> Result<i32> {
@@ -100,7 +100,30 @@ fn dem(s: &PlanStage) -> String {
         if s.quench { ", velocities quenched when only the kinetic criterion fails" } else { "" },
     );
     if let Some(r) = &s.relax {
-        out += &format!("   relax:     {r:?}\n");
+        out += &format!("   relax:     {}\n", relax(r));
     }
     out
+}
+
+/// A final relaxation in words: how, and when it starts.
+fn relax(r: &Relax) -> String {
+    let how = match r.method {
+        RelaxMethod::Fire => "FIRE on the grains and the cell".to_string(),
+        RelaxMethod::Damping if r.tangential_zeta > 0.0 => format!(
+            "background damping {} with tangential and rolling dashpots ζ_t = {}",
+            r.damping, r.tangential_zeta
+        ),
+        RelaxMethod::Damping => format!("background damping {}", r.damping),
+    };
+    let mut when = format!(
+        "once the interaction list has held for {} (at rest to {} × the criteria",
+        r.settle_time, r.settle_factor
+    );
+    if r.free_rollers {
+        when += ", free rollers left out";
+    }
+    if r.mean_stress {
+        when += ", the stress judged on its mean over that time";
+    }
+    format!("{how}, {when})")
 }
