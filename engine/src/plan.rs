@@ -221,13 +221,6 @@ impl PlanStep {
 }
 
 impl PlanStage {
-    /// A stress-controlled stage: the target pressure.
-    pub fn target(&self) -> Option<f64> {
-        match self.kind {
-            StageKind::Compress { pressure } => Some(pressure),
-            _ => None,
-        }
-    }
     /// Does the stage end otherwise than on the criteria (one cluster, or its full time)?
     pub fn ends_otherwise(&self) -> bool {
         matches!(
@@ -377,11 +370,6 @@ impl Plan {
             .rev()
             .find_map(|s| s.dem().map(|s| s.pressure))
             .flatten()
-    }
-
-    /// The pressure of the last DEM stage (`None` without a `compress` stage).
-    pub fn final_pressure(&self) -> Option<f64> {
-        self.dem_stages().last().and_then(|s| s.pressure)
     }
 }
 
