@@ -7,7 +7,7 @@
 mod common;
 use common::rel;
 
-use grainbench_comparisons::xcode::decks::{self, PlanStage, StageKind, Start, Tolerances};
+use grainbench_comparisons::xcode::decks::{self, Start, Tolerances};
 use grainbench_comparisons::xcode::import::{self, last_dump_frame, Meta};
 use grainbench_comparisons::xcode::Code;
 use grainbench_engine::contact::hertz_mindlin::HertzMindlin;
@@ -51,34 +51,20 @@ criteria = {{ preset = "ar07" }}
 /// Two unit spheres along x at overlap `h`, velocities `v1`, `v2`, masses `m`, `steps` steps
 /// of `dt` in a fixed 20³ cell.
 fn start(h: f64, v1: [f64; 3], v2: [f64; 3], m: f64, steps: u64, dt: f64) -> Start {
-    let stages = vec![PlanStage {
-        kind: StageKind::FixedVolume { full_time: true },
-        max_strain_rate: 0.0,
-        max_time: steps as f64 * dt,
-        max_steps: steps,
-        mu: Mu::Finite(MU),
-        kappa: KAPPA,
+    let stages = vec![common::fixed_stage(
+        true,
+        Mu::Finite(MU),
+        KAPPA,
         dt,
-        tolerances: Tolerances {
+        steps,
+        10,
+        Tolerances {
             force: 1e-4,
             moment: 1e-4,
             stress: 1e-4,
             kinetic_per_grain: 1e-8,
         },
-        check_every: 10,
-        relax: None,
-        window: 0.0,
-        quench: false,
-        servo_gain: None,
-        pressure: None,
-        mu_r: None,
-        kappa_factor: 1.0,
-        k_max: f64::NAN,
-        criteria: Default::default(),
-        f_ref: 1.0,
-        max_overlap: 1.0,
-    }];
-    let plan = common::plan(&scene(), &stages);
+    )];
     Start {
         scene: scene(),
         dimension: 3,
@@ -92,7 +78,6 @@ fn start(h: f64, v1: [f64; 3], v2: [f64; 3], m: f64, steps: u64, dt: f64) -> Sta
         prelude: Vec::new(),
         interlude: Vec::new(),
         trace_steps: None,
-        plan,
         stages,
     }
 }

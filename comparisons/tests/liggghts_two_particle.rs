@@ -12,9 +12,7 @@
 mod common;
 use common::rel;
 
-use grainbench_comparisons::xcode::decks::{
-    self, liggghts, PlanStage, StageKind, Start, Tolerances,
-};
+use grainbench_comparisons::xcode::decks::{self, liggghts, Start, Tolerances};
 use grainbench_comparisons::xcode::import::{self, Meta};
 use grainbench_comparisons::xcode::Code;
 use grainbench_engine::contact::{ContactLaw, Pair};
@@ -59,34 +57,20 @@ max_time = 1.0
 
 /// Sphere 1 at rest at x = 4.5, sphere 2 overlapping by `h0` along x with velocity `v2`.
 fn start(zeta: f64, h0: f64, v2: [f64; 3], steps: u64, dt: f64) -> Start {
-    let stages = vec![PlanStage {
-        kind: StageKind::FixedVolume { full_time: false },
-        max_strain_rate: 0.0,
-        max_time: steps as f64 * dt,
-        max_steps: steps,
-        mu: Mu::Infinite,
-        kappa: KAPPA,
+    let stages = vec![common::fixed_stage(
+        false,
+        Mu::Infinite,
+        KAPPA,
         dt,
-        tolerances: Tolerances {
+        steps,
+        steps,
+        Tolerances {
             force: 0.0,
             moment: 0.0,
             stress: 0.0,
             kinetic_per_grain: 0.0,
         },
-        check_every: steps,
-        relax: None,
-        window: 0.0,
-        quench: false,
-        servo_gain: None,
-        pressure: None,
-        mu_r: None,
-        kappa_factor: 1.0,
-        k_max: f64::NAN,
-        criteria: Default::default(),
-        f_ref: 1.0,
-        max_overlap: 1.0,
-    }];
-    let plan = common::plan(&scene(zeta), &stages);
+    )];
     Start {
         scene: scene(zeta),
         dimension: 3,
@@ -100,7 +84,6 @@ fn start(zeta: f64, h0: f64, v2: [f64; 3], steps: u64, dt: f64) -> Start {
         prelude: Vec::new(),
         interlude: Vec::new(),
         trace_steps: None,
-        plan,
         stages,
     }
 }
@@ -263,7 +246,6 @@ fn sjkr_start(d2: f64, h0: f64, v2: [f64; 3], steps: u64, dt: f64) -> Start {
     let mut s = start(zeta, h0, v2, steps, dt);
     s.scene = scene_with(zeta, &format!("mu = 0.0\nsjkr = {SJKR_K}"));
     s.stages[0].mu = Mu::Finite(0.0);
-    s.plan = common::plan(&s.scene, &s.stages);
     s.diameter[1] = d2;
     s.mass[1] = d2.powi(3);
     s.inertia[1] = 0.1 * d2.powi(5);

@@ -16,7 +16,7 @@
 
 mod common;
 
-use grainbench_comparisons::xcode::decks::{self, PlanStage, StageKind, Start, Tolerances};
+use grainbench_comparisons::xcode::decks::{self, Start, Tolerances};
 use grainbench_comparisons::xcode::import::{self, Meta};
 use grainbench_comparisons::xcode::Code;
 use grainbench_engine::scene::{Mu, Scene};
@@ -95,29 +95,15 @@ fn setup() -> Setup {
         stress: 0.0,
         kinetic_per_grain: 0.0,
     };
-    let stages = vec![PlanStage {
-        kind: StageKind::FixedVolume { full_time: true },
-        max_strain_rate: 0.0,
-        max_time: STEPS as f64 * DT,
-        max_steps: STEPS,
-        mu: Mu::Finite(MU),
-        kappa: KAPPA,
-        dt: DT,
-        tolerances: tiny,
-        check_every: STEPS,
-        relax: None,
-        window: 0.0,
-        quench: false,
-        servo_gain: None,
-        pressure: None,
-        mu_r: None,
-        kappa_factor: 1.0,
-        k_max: f64::NAN,
-        criteria: Default::default(),
-        f_ref: 1.0,
-        max_overlap: 1.0,
-    }];
-    let plan = common::plan(&scene, &stages);
+    let stages = vec![common::fixed_stage(
+        true,
+        Mu::Finite(MU),
+        KAPPA,
+        DT,
+        STEPS,
+        STEPS,
+        tiny,
+    )];
     let start = Start {
         scene,
         dimension: 3,
@@ -131,7 +117,6 @@ fn setup() -> Setup {
         prelude: Vec::new(),
         interlude: Vec::new(),
         trace_steps: None,
-        plan,
         stages,
     };
     Setup { start }

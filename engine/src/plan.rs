@@ -269,7 +269,7 @@ impl Plan {
         let mut pressure: Option<f64> = None;
         let mut steps = Vec::new();
         for (_, step) in scene.stages() {
-            let kind = match step {
+            let (kind, max_strain_rate) = match step {
                 Step::Expand { factor } => {
                     steps.push(PlanStep::Hard(HardStage::Expand { factor }));
                     continue;
@@ -277,38 +277,37 @@ impl Plan {
                 Step::HardSphereMix {
                     collisions_per_grain,
                 } => {
-                    steps.push(PlanStep::Hard(HardStage::HardSphereMix {
+                    let mix = HardStage::HardSphereMix {
                         collisions_per_grain,
-                    }));
+                    };
+                    steps.push(PlanStep::Hard(mix));
                     continue;
                 }
                 Step::Grow {
                     packing_fraction,
                     rate,
                 } => {
-                    steps.push(PlanStep::Hard(HardStage::Grow {
+                    let grow = HardStage::Grow {
                         packing_fraction,
                         rate,
-                    }));
+                    };
+                    steps.push(PlanStep::Hard(grow));
                     continue;
                 }
-                Step::Compress { pressure: p, .. } => StageKind::Compress { pressure: p },
-                Step::FixedVolume { full_time, .. } => StageKind::FixedVolume { full_time },
-                Step::Aggregate { .. } => StageKind::Aggregate,
-                Step::PressureProgram { .. } | Step::KappaRamp { .. } => {
-                    unreachable!("Scene::stages unrolls {}", step.kind())
-                }
-            };
-            let max_strain_rate = match step {
                 Step::Compress {
                     pressure: p,
                     inertia_cap,
                     ..
                 } => {
                     pressure = Some(p);
-                    inertia_cap / rate_time_unit(p, cohesive)
+                    let cap = inertia_cap / rate_time_unit(p, cohesive);
+                    (StageKind::Compress { pressure: p }, cap)
                 }
-                _ => 0.0,
+                Step::FixedVolume { full_time, .. } => (StageKind::FixedVolume { full_time }, 0.0),
+                Step::Aggregate { .. } => (StageKind::Aggregate, 0.0),
+                Step::PressureProgram { .. } | Step::KappaRamp { .. } => {
+                    unreachable!("Scene::stages unrolls {}", step.kind())
+                }
             };
             // κ of the stage (GRC07 §III.B.2 ramps), always scaled from the scene's law so
             // that a resumed run has the same law bit for bit.
@@ -365,7 +364,7 @@ impl Plan {
 
     /// The pressure last prescribed at or before stage `k` (`None` before any `compress`).
     pub fn pressure_at(&self, k: usize) -> Option<f64> {
-        self.steps[..=k.min(self.steps.len().saturating_sub(1))]
+        self.steps[..=k]
             .iter()
             .rev()
             .find_map(|s| s.dem().map(|s| s.pressure))

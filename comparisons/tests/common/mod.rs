@@ -25,15 +25,38 @@ pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
 
-/// The plan of a hand-made start: `scene`'s, with `stages` as its DEM stages (the two-particle
-/// tests run a fixed cell for a given number of steps of a given time step).
+/// A fixed-cell DEM stage of `steps` steps of `dt` (the two-particle tests run one), checked
+/// every `check_every` steps against `tolerances`.
 #[allow(dead_code)] // not every test file uses it
-pub fn plan(
-    scene: &grainbench_engine::scene::Scene,
-    stages: &[grainbench_engine::plan::PlanStage],
-) -> grainbench_engine::plan::Plan {
-    use grainbench_engine::plan::{Plan, PlanStep};
-    let mut plan = Plan::new(scene, &[1.0]).expect("plan");
-    plan.steps = stages.iter().map(|s| PlanStep::Dem(*s)).collect();
-    plan
+pub fn fixed_stage(
+    full_time: bool,
+    mu: grainbench_engine::scene::Mu,
+    kappa: f64,
+    dt: f64,
+    steps: u64,
+    check_every: u64,
+    tolerances: grainbench_engine::plan::Tolerances,
+) -> grainbench_engine::plan::PlanStage {
+    grainbench_engine::plan::PlanStage {
+        kind: grainbench_engine::plan::StageKind::FixedVolume { full_time },
+        max_strain_rate: 0.0,
+        servo_gain: None,
+        pressure: None,
+        mu,
+        mu_r: None,
+        kappa,
+        kappa_factor: 1.0,
+        dt,
+        k_max: f64::NAN,
+        max_time: steps as f64 * dt,
+        max_steps: steps,
+        criteria: Default::default(),
+        tolerances,
+        f_ref: 1.0,
+        window: 0.0,
+        quench: false,
+        check_every,
+        max_overlap: 1.0,
+        relax: None,
+    }
 }

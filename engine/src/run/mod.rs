@@ -250,8 +250,7 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
         {
             Payload::Inside(st, watch) => {
                 let sys = System::from_state(law, st);
-                let diameter: Vec<f64> = sys.radius.iter().map(|r| 2.0 * r).collect();
-                ctx.plan_for(&diameter)?;
+                ctx.plan_for_system(&sys)?;
                 (
                     sys,
                     Some((h.stage_time0, h.stage_steps0, h.stage_wall, watch)),

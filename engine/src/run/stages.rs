@@ -108,6 +108,15 @@ impl<'s, D: Dim> Ctx<'s, D> {
         Ok(self.plan())
     }
 
+    /// [`Ctx::plan_for`] the grains of `sys`.
+    pub(super) fn plan_for_system<L: ContactLaw<D>>(
+        &mut self,
+        sys: &System<D, L>,
+    ) -> Result<&Plan, RunError> {
+        let diameter: Vec<f64> = sys.radius.iter().map(|r| 2.0 * r).collect();
+        self.plan_for(&diameter)
+    }
+
     /// The plan (built by [`Ctx::plan_for`] before any stage runs).
     pub(super) fn plan(&self) -> &Plan {
         self.plan
@@ -300,8 +309,7 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
 ) -> Result<(Vec<StepReport>, Snapshot, super::checks::AtThreshold), RunError> {
     sys.init_forces();
     let mut ctx = Ctx::<D>::new(scene);
-    let diameter: Vec<f64> = sys.radius.iter().map(|r| 2.0 * r).collect();
-    ctx.plan_for(&diameter)?;
+    ctx.plan_for_system(sys)?;
     let n = ctx.stages.len();
     let stopped = run_stages(&mut ctx, sys, 0..n, None, opts)?;
     let status = if stopped {

@@ -52,9 +52,8 @@ pub struct Start {
     pub prelude: Vec<String>,
     /// Hard-grain stages between DEM stages (no external code can run them: refused).
     pub interlude: Vec<String>,
-    /// The run resolved by the engine, and its DEM stages in order (the stages every deck
-    /// runs, with the engine's numbers).
-    pub plan: Plan,
+    /// The DEM stages of the engine's [`Plan`], in order: the stages every deck runs, with the
+    /// engine's numbers.
     pub stages: Vec<PlanStage>,
     /// Steps between frames of the trace (`output.trace_every` in the first stage's time
     /// steps, at least 1), if the scene asks for one.
@@ -122,8 +121,8 @@ impl Start {
     /// The same grains under `scene`'s protocol (which must keep the hard-grain prelude): the
     /// plan resolved again.
     pub fn with_scene(mut self, scene: Scene) -> Result<Start, String> {
-        self.plan = Plan::new(&scene, &self.diameter)?;
-        (self.stages, self.interlude) = after_prelude(&self.plan, self.prelude.len());
+        let plan = Plan::new(&scene, &self.diameter)?;
+        (self.stages, self.interlude) = after_prelude(&plan, self.prelude.len());
         self.scene = scene;
         Ok(self)
     }
@@ -231,7 +230,6 @@ fn start_dim<D: Dim>(scene: &Scene) -> Result<Start, String> {
             .zip(stages.first())
             .map(|(t, s)| ((t / s.dt).round() as u64).max(1)),
         stages,
-        plan,
     })
 }
 
