@@ -122,7 +122,7 @@ fn remove_stale_deck(dir: &Path, code: Code) -> Result<()> {
         let generated = name == "deck.json"
             || data.iter().any(|d| d == name)
             || name == decks::lammps_table::TABLE
-            || name == decks::lammps_table::BENCH_TABLE
+            || name == decks::lammps_bench::BENCH_TABLE
             || std::fs::read(&path).is_ok_and(|b| b.starts_with(b"# grainbench deck for scene"));
         if generated && path.is_file() {
             std::fs::remove_file(&path)

@@ -132,6 +132,15 @@ pub trait Dim: Copy + Clone + Debug + Default + Send + Sync + 'static {
     const INERTIA_FACTOR: f64;
     /// Mass exponent: a homogeneous grain of diameter d has mass (d/a)^D.
     fn product(v: Self::V) -> f64;
+    /// `x` as the 3D member of its family where this dimension is 3D, `None` in 2D: the proof
+    /// that `Self` is [`D3`], with which generic code hands its data to a 3D-only kernel
+    /// without a cast.
+    fn as_3d<T: ByDim>(x: T::Of<Self>) -> Option<T::Of<D3>>;
+}
+
+/// A family of types, one per dimension (`Of<D2>`, `Of<D3>`), for [`Dim::as_3d`].
+pub trait ByDim {
+    type Of<D: Dim>;
 }
 
 /// 2D disks.
@@ -143,6 +152,9 @@ pub struct D3;
 
 impl Dim for D2 {
     const D: usize = 2;
+    fn as_3d<T: ByDim>(_: T::Of<D2>) -> Option<T::Of<D3>> {
+        None
+    }
     type V = Vector2<f64>;
     type Ang = f64;
     const INERTIA_FACTOR: f64 = 1.0 / 8.0;
@@ -193,6 +205,9 @@ impl Dim for D2 {
 
 impl Dim for D3 {
     const D: usize = 3;
+    fn as_3d<T: ByDim>(x: T::Of<D3>) -> Option<T::Of<D3>> {
+        Some(x)
+    }
     type V = Vector3<f64>;
     type Ang = Vector3<f64>;
     const INERTIA_FACTOR: f64 = 1.0 / 10.0;

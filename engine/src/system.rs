@@ -6,15 +6,12 @@
 //! one contiguous piece per thread (engine/src/parallel.rs).
 
 use crate::cell::Cell;
-use crate::contact::hertz_mindlin::HertzMindlin;
-use crate::contact::hertz_mindlin_avx;
-use crate::contact::slider::{Coulomb, NoSlip};
+use crate::contact::batch::{self, PairChunk};
 use crate::contact::{ContactLaw, Pair, PairForce};
 use crate::geometry::{add_outer, Dim, Tensor, VectorOps};
 use crate::neighbor::{branch, wrap_moved, NeighborList, ROW_CHUNK};
 use crate::parallel::{balanced_cuts, piece_len};
 use rayon::prelude::*;
-use std::any::{Any, TypeId};
 
 /// Grains handled per parallel task in the per-grain loops.
 const GRAIN_CHUNK: usize = 256;
@@ -58,9 +55,9 @@ pub struct System<D: Dim, L: ContactLaw<D>> {
     /// Largest radius, at construction and at each list build (so the per-step staleness
     /// check does not scan the radii).
     r_max: f64,
-    /// Run the law's SIMD force kernel where it has one (default: where the CPU runs it and
-    /// `GRAINBENCH_SCALAR` is unset; `contact::hertz_mindlin_avx`); `false` keeps the scalar
-    /// reference path.
+    /// Run the law's batch (SIMD) force kernel where it has one, [`ContactLaw::force_batch`]
+    /// (default: where the CPU runs it and `GRAINBENCH_SCALAR` is unset, `contact::batch`);
+    /// `false` keeps the scalar reference path.
     pub simd: bool,
     /// Set by [`System::shed_step_buffers`]: the system can be read, no longer stepped.
     shed: bool,
@@ -132,7 +129,7 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
             step: 0,
             max_disp: 0.0,
             r_max: 0.0,
-            simd: hertz_mindlin_avx::wanted(),
+            simd: batch::wanted(),
             shed: false,
         };
         sys.r_max = sys.radius.iter().cloned().fold(0.0, f64::max);
@@ -538,41 +535,31 @@ impl<D: Dim, L: ContactLaw<D>> System<D, L> {
     }
 
     /// [`Self::force_chunk`] by the law's batch kernel, where it has one for this dimension
-    /// and CPU (3D Hertz–Mindlin with Coulomb or no-slip friction, AVX); `None` otherwise.
+    /// and CPU; `None` otherwise.
     fn force_chunk_batch(
         &self,
         job: &mut Job<'_, L::History, D::V, D::Ang>,
         erate: &D::V,
         dt: f64,
     ) -> Option<ChunkSum> {
-        let law = &self.law as &dyn Any;
-        let coulomb = law.downcast_ref::<HertzMindlin<Coulomb>>();
-        let no_slip = law.downcast_ref::<HertzMindlin<NoSlip>>();
-        if coulomb.is_none() && no_slip.is_none() {
-            return None;
-        }
-        let mut chunk = hertz_mindlin_avx::Chunk {
+        let mut chunk = PairChunk {
             rows: job.rows.clone(),
             first: job.first,
             row_start: &self.nlist.row_start,
             partner: &self.nlist.partner,
-            s: same(&self.s)?,
-            u: same(&self.u)?,
-            w: same(&self.w)?,
+            s: &self.s,
+            u: &self.u,
+            w: &self.w,
             radius: &self.radius,
             mass: &self.mass,
-            l: *(&self.cell.l as &dyn Any).downcast_ref()?,
-            erate: *(erate as &dyn Any).downcast_ref()?,
+            l: self.cell.l,
+            erate: *erate,
             dt,
-            hist: same_mut(job.hist)?,
-            f: same_mut(job.f)?,
-            c: same_mut(job.c)?,
+            hist: &mut *job.hist,
+            f: &mut *job.f,
+            c: &mut *job.c,
         };
-        let (virial, overlap) = match (coulomb, no_slip) {
-            (Some(law), _) => hertz_mindlin_avx::force_chunk(law, &mut chunk)?,
-            (_, Some(law)) => hertz_mindlin_avx::force_chunk(law, &mut chunk)?,
-            _ => return None,
-        };
+        let (virial, overlap) = self.law.force_batch(&mut chunk)?;
         Some(ChunkSum { virial, overlap })
     }
 
@@ -914,20 +901,6 @@ pub struct Interaction<D: Dim> {
     pub tangential: D::V,
     pub rolling: D::Ang,
     pub gap: f64,
-}
-
-/// `x` as a slice of `B` when `A` is `B` (the batch kernels take concrete types).
-fn same<A: 'static, B: 'static>(x: &[A]) -> Option<&[B]> {
-    (TypeId::of::<A>() == TypeId::of::<B>())
-        // SAFETY: A and B are the same type.
-        .then(|| unsafe { std::slice::from_raw_parts(x.as_ptr().cast::<B>(), x.len()) })
-}
-
-/// [`same`] for a mutable slice.
-fn same_mut<A: 'static, B: 'static>(x: &mut [A]) -> Option<&mut [B]> {
-    (TypeId::of::<A>() == TypeId::of::<B>())
-        // SAFETY: A and B are the same type.
-        .then(|| unsafe { std::slice::from_raw_parts_mut(x.as_mut_ptr().cast::<B>(), x.len()) })
 }
 
 fn add_tensor(acc: &mut Tensor, t: &Tensor) {

@@ -4,8 +4,8 @@
 //! stirred hard enough to take the kernel's rare branches (springs turned by more than 3 mrad
 //! in a step, pivot angles above 1e-3 rad, Coulomb sliding).
 
+use grainbench_engine::contact::batch;
 use grainbench_engine::contact::hertz_mindlin::HertzMindlin;
-use grainbench_engine::contact::hertz_mindlin_avx;
 use grainbench_engine::contact::slider::{Coulomb, Friction, NoSlip};
 use grainbench_engine::contact::ContactLaw;
 use grainbench_engine::geometry::D3;
@@ -73,7 +73,7 @@ fn lockstep<
 }
 
 fn require_avx() -> bool {
-    if hertz_mindlin_avx::available() {
+    if batch::available() {
         return true;
     }
     eprintln!("this CPU has no AVX: only the scalar path runs, nothing to compare");

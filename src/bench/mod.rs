@@ -10,7 +10,7 @@ use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::outcome::Outcome;
 use grainbench_comparisons::xcode::crosscode::CodeResult;
-use grainbench_comparisons::xcode::decks::{lammps_table, Code, Deck, Start};
+use grainbench_comparisons::xcode::decks::{lammps_bench, Code, Deck, Start};
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;
 use report::{notes, rows_of, run_line, to_csv, to_markdown, Report, Run};
@@ -234,7 +234,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
             {
                 match (
                     Code::Lammps.find(),
-                    lammps_table::deck(st, lammps_table::CLASSES),
+                    lammps_bench::deck(st, lammps_bench::CLASSES),
                 ) {
                     (Some(bin), Ok(deck)) => {
                         r.outcome = Outcome::Ran;
@@ -242,7 +242,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
                         r.deviations = deck.deviations.clone();
                         eprintln!(
                             "lammps    bench-only deck: diameters in {} size classes, GRC07 attraction by pair_style table (approximate, throughput only)",
-                            lammps_table::CLASSES
+                            lammps_bench::CLASSES
                         );
                         Some((bin, deck))
                     }
@@ -468,7 +468,7 @@ fn run_external(
     let throughput_only = deck
         .files
         .iter()
-        .any(|(n, _)| n == lammps_table::BENCH_TABLE);
+        .any(|(n, _)| n == lammps_bench::BENCH_TABLE);
     if throughput_only && done.status.is_some_and(|s| s.success()) {
         // No final state to read back: steps and status from the log.
         if r.version.is_none() {

@@ -17,7 +17,7 @@
 //! particles.csv), `{output}` (where the code writes its final state), `{threads}`,
 //! `{adapter_dir}` (the adapter file's directory, for scripts shipped beside it).
 
-use super::decks::capability::{Feature, Support};
+use super::decks::feature::{Feature, Support};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;

@@ -1,11 +1,64 @@
-//! Contact laws of a scene's `[law]` table, in reduced units.
+//! Contact laws of a scene's `[law]` table, in reduced units: [`with_law`] chooses the law's
+//! type and its numbers, in one place; the constructors below give the numbers of each family.
 
 use crate::contact::dmt::Dmt;
-use crate::contact::hertz_mindlin::HertzMindlin;
-use crate::contact::linear::{Adhesion, Linear};
+use crate::contact::hertz_mindlin::{HertzCohesion, HertzMindlin, NoCohesion as HertzNoCohesion};
+use crate::contact::linear::{Adhesion, CohesionModel, Linear, NoCohesion};
 use crate::contact::sjkr::Sjkr;
-use crate::contact::slider::RollingSpring;
-use crate::scene::Law;
+use crate::contact::slider::{Coulomb, Friction, Frictionless, NoRolling, NoSlip, RollingSpring};
+use crate::contact::ContactLaw;
+use crate::geometry::Dim;
+use crate::scene::{Law, Mu};
+
+/// What runs with a law once its type is known: a function generic over the law, so that each
+/// combination of sub-models gets its own monomorphized kernel.
+pub trait WithLaw<D: Dim> {
+    type Output;
+    fn with<L: ContactLaw<D>>(self, law: L) -> Self::Output;
+}
+
+/// Hands `w` the law of `law` with the friction `mu` (a stage's μ: AR07 C and GRC07 change it
+/// between stages): the cohesion model, the friction kind (μ = 0, finite, ∞) and the rolling
+/// resistance each become a type, and a scene pays only for the physics it uses.
+pub fn with_law<D: Dim, W: WithLaw<D>>(law: &Law, mu: Mu, w: W) -> W::Output {
+    match law {
+        Law::HertzMindlin { sjkr: Some(k), .. } => hertz(law, Sjkr { k: *k }, mu, w),
+        Law::HertzMindlin { dmt: Some(g), .. } => hertz(law, Dmt { gamma: *g }, mu, w),
+        Law::HertzMindlin { .. } => hertz(law, HertzNoCohesion, mu, w),
+        Law::Linear {
+            cohesion: Some(c), ..
+        } => linear(law, adhesion(c), mu, w),
+        Law::Linear { .. } => linear(law, NoCohesion, mu, w),
+    }
+}
+
+fn hertz<D: Dim, C: HertzCohesion, W: WithLaw<D>>(law: &Law, c: C, mu: Mu, w: W) -> W::Output {
+    match mu {
+        Mu::Finite(0.0) => w.with(hertz_mindlin_law(law, Frictionless).with_cohesion(c)),
+        Mu::Finite(m) => w.with(hertz_mindlin_law(law, Coulomb { mu: m }).with_cohesion(c)),
+        Mu::Infinite => w.with(hertz_mindlin_law(law, NoSlip).with_cohesion(c)),
+    }
+}
+
+fn linear<D: Dim, C: CohesionModel, W: WithLaw<D>>(law: &Law, c: C, mu: Mu, w: W) -> W::Output {
+    match mu {
+        Mu::Finite(0.0) => linear_rolling(law, c, Frictionless, w),
+        Mu::Finite(m) => linear_rolling(law, c, Coulomb { mu: m }, w),
+        Mu::Infinite => linear_rolling(law, c, NoSlip, w),
+    }
+}
+
+fn linear_rolling<D: Dim, C: CohesionModel, F: Friction, W: WithLaw<D>>(
+    law: &Law,
+    c: C,
+    f: F,
+    w: W,
+) -> W::Output {
+    match rolling_spring(law) {
+        Some(r) => w.with(linear_law(law, c, f, r)),
+        None => w.with(linear_law(law, c, f, NoRolling)),
+    }
+}
 
 /// The Hertz–Mindlin law of a scene in reduced units: κ = (Ẽ/P_ref)^(2/3) with P_ref = 1
 /// (AR07 (21)), so Ẽ = κ^(3/2). Panics if `law` is not Hertz–Mindlin.

@@ -1,9 +1,12 @@
 //! Hertz–Mindlin spheres (AR07 §II.A, App. A, App. B), with an optional contact cohesion model
 //! from another code ([`HertzCohesion`]: [`super::sjkr::Sjkr`], [`super::dmt::Dmt`]).
 
-use super::slider::Friction;
+use super::batch::{ChunkSum, PairChunk};
+use super::hertz_mindlin_avx::{self, Coefficients};
+use super::slider::{Friction, Spring};
 use super::{ContactLaw, Pair, PairForce};
-use crate::geometry::{Dim, VectorOps};
+use crate::geometry::{ByDim, Dim, VectorOps};
+use std::marker::PhantomData;
 
 /// A cohesion model acting in contact on top of the Hertz force: the total normal force and the
 /// force the Coulomb cap multiplies (AR07: the elastic part alone).
@@ -158,4 +161,31 @@ impl<D: Dim, F: Friction, C: HertzCohesion> ContactLaw<D> for HertzMindlin<F, C>
     fn stored(&self, hist: &Self::History) -> (D::V, D::Ang) {
         (F::force::<D>(hist), D::Ang::zero())
     }
+
+    /// The AVX kernel of 3D spheres with springs and no cohesion
+    /// ([`hertz_mindlin_avx`]); every other combination runs pair by pair.
+    fn force_batch(&self, chunk: &mut PairChunk<'_, D, Self::History>) -> Option<ChunkSum> {
+        if C::ACTIVE {
+            return None;
+        }
+        let chunk = D::as_3d::<SpringChunk<'_, '_>>(F::springs::<D>(chunk)?)?;
+        let law = Coefficients {
+            e_tilde: self.e_tilde,
+            kt_ratio: self.kt_ratio,
+            zeta: self.zeta,
+            mu: self.friction.mu(),
+        };
+        if law.mu.is_finite() {
+            hertz_mindlin_avx::force_chunk::<true>(&law, chunk)
+        } else {
+            hertz_mindlin_avx::force_chunk::<false>(&law, chunk)
+        }
+    }
+}
+
+/// A chunk of the force pass with tangential springs, in each dimension (for [`Dim::as_3d`]).
+struct SpringChunk<'x, 'y>(PhantomData<&'x mut &'y ()>);
+
+impl<'x, 'y: 'x> ByDim for SpringChunk<'x, 'y> {
+    type Of<D: Dim> = &'x mut PairChunk<'y, D, Spring<D::V>>;
 }

@@ -14,87 +14,34 @@
 //! The rare lanes whose spring turned by more than ~3 mrad in a step, or pivoted by more than
 //! 1e-3 rad, take the scalar formula for that part.
 
-use super::hertz_mindlin::{HertzMindlin, NoCohesion};
-use super::slider::{Coulomb, NoSlip, Spring};
-use crate::geometry::Tensor;
+use super::batch::{self, ChunkSum, PairChunk};
+use super::slider::Spring;
+use crate::geometry::D3;
 use nalgebra::Vector3;
 
 type V3 = Vector3<f64>;
 
-/// The friction kinds of the batch kernel: a Coulomb cap μ N_e, or none (μ = ∞, AR07 Z).
-pub trait BatchFriction: Copy {
-    const CAP: bool;
-    fn mu(&self) -> f64;
+/// The law's numbers the kernel reads (`HertzMindlin`'s, without its type parameters).
+#[derive(Clone, Copy, Debug)]
+pub struct Coefficients {
+    pub e_tilde: f64,
+    pub kt_ratio: f64,
+    pub zeta: f64,
+    /// μ of the Coulomb cap, read where the kernel caps (`CAP`).
+    pub mu: f64,
 }
 
-impl BatchFriction for Coulomb {
-    const CAP: bool = true;
-    fn mu(&self) -> f64 {
-        self.mu
-    }
-}
+/// One chunk of the force pass, concretely typed: 3D, with tangential springs.
+pub type Chunk<'a> = PairChunk<'a, D3, Spring<V3>>;
 
-impl BatchFriction for NoSlip {
-    const CAP: bool = false;
-    fn mu(&self) -> f64 {
-        f64::INFINITY
-    }
-}
-
-/// One chunk of rows of the force pass, concretely typed: what `System::force_chunk` reads
-/// and writes.
-pub struct Chunk<'a> {
-    pub rows: std::ops::Range<usize>,
-    /// Index of the chunk's first pair in the neighbour list.
-    pub first: usize,
-    pub row_start: &'a [u32],
-    pub partner: &'a [u32],
-    pub s: &'a [V3],
-    pub u: &'a [V3],
-    pub w: &'a [V3],
-    pub radius: &'a [f64],
-    pub mass: &'a [f64],
-    /// Cell lengths and the strain rate of the velocity field (`Cell::velocity_strain_rate`).
-    pub l: V3,
-    pub erate: V3,
-    pub dt: f64,
-    pub hist: &'a mut [Spring<V3>],
-    pub f: &'a mut [V3],
-    pub c: &'a mut [V3],
-}
-
-/// The chunk's contact virial Σ f ⊗ r and its largest overlap relative to the smaller
-/// radius, with the pair (as the scalar pass).
-pub type ChunkSum = (Tensor, (f64, u32, u32));
-
-/// Does this CPU run the kernel?
-pub fn available() -> bool {
+/// The force pass over `chunk` with the law `law`, its springs capped by Coulomb (`CAP`, μ
+/// finite) or never (μ = ∞, AR07 Z); `None` where the CPU lacks AVX.
+pub fn force_chunk<const CAP: bool>(law: &Coefficients, chunk: &mut Chunk<'_>) -> Option<ChunkSum> {
     #[cfg(target_arch = "x86_64")]
     {
-        std::arch::is_x86_feature_detected!("avx")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-/// Should a new system use the kernel: where the CPU runs it, unless the environment sets
-/// `GRAINBENCH_SCALAR` (any value), which keeps every run on the scalar reference path.
-pub fn wanted() -> bool {
-    available() && std::env::var_os("GRAINBENCH_SCALAR").is_none()
-}
-
-/// The force pass over `chunk` with `law`; `None` where the CPU lacks AVX.
-pub fn force_chunk<F: BatchFriction>(
-    law: &HertzMindlin<F, NoCohesion>,
-    chunk: &mut Chunk<'_>,
-) -> Option<ChunkSum> {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if available() {
+        if batch::available() {
             // SAFETY: the CPU has AVX (checked just above).
-            return Some(unsafe { avx::force_chunk(law, chunk) });
+            return Some(unsafe { avx::force_chunk::<CAP>(law, chunk) });
         }
     }
     let _ = (law, chunk);
@@ -103,8 +50,7 @@ pub fn force_chunk<F: BatchFriction>(
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
-    use super::{BatchFriction, Chunk, ChunkSum, V3};
-    use crate::contact::hertz_mindlin::{HertzMindlin, NoCohesion};
+    use super::{Chunk, ChunkSum, Coefficients, V3};
     use crate::contact::slider::Spring;
     use crate::geometry::D3;
     use crate::neighbor::branch;
@@ -293,10 +239,7 @@ mod avx {
 
     /// `System::force_chunk` for `law`, four pairs within reach at a time.
     #[target_feature(enable = "avx")]
-    pub fn force_chunk<F: BatchFriction>(
-        law: &HertzMindlin<F, NoCohesion>,
-        ch: &mut Chunk<'_>,
-    ) -> ChunkSum {
+    pub fn force_chunk<const CAP: bool>(law: &Coefficients, ch: &mut Chunk<'_>) -> ChunkSum {
         let mut sum: ChunkSum = ([[0.0; 3]; 3], (0.0, 0, 0));
         let mut lanes = Lanes {
             pair: [(0, 0); BLOCK + W],
@@ -324,12 +267,12 @@ mod avx {
                 lanes.empty += !reach as usize;
                 tested += 1;
                 if tested == BLOCK {
-                    flush(law, ch, &mut lanes, &mut sum);
+                    flush::<CAP>(law, ch, &mut lanes, &mut sum);
                     tested = 0;
                 }
             }
         }
-        flush(law, ch, &mut lanes, &mut sum);
+        flush::<CAP>(law, ch, &mut lanes, &mut sum);
         let full = lanes.full;
         if full > 0 {
             // Pad with copies of the first pair; only the first `full` lanes are stored.
@@ -339,7 +282,7 @@ mod avx {
                     lanes.r[a][l] = lanes.r[a][0];
                 }
             }
-            batch(law, ch, &lanes, 0, full, &mut sum);
+            batch::<CAP>(law, ch, &lanes, 0, full, &mut sum);
         }
         sum
     }
@@ -348,8 +291,8 @@ mod avx {
     /// whole batches; the rest (fewer than `W`) moves to the front for the next block.
     #[target_feature(enable = "avx")]
     #[inline]
-    fn flush<F: BatchFriction>(
-        law: &HertzMindlin<F, NoCohesion>,
+    fn flush<const CAP: bool>(
+        law: &Coefficients,
         ch: &mut Chunk<'_>,
         lanes: &mut Lanes,
         sum: &mut ChunkSum,
@@ -368,7 +311,7 @@ mod avx {
         lanes.empty = 0;
         let whole = lanes.full - lanes.full % W;
         for start in (0..whole).step_by(W) {
-            batch(law, ch, lanes, start, W, sum);
+            batch::<CAP>(law, ch, lanes, start, W, sum);
         }
         for l in whole..lanes.full {
             lanes.pair[l - whole] = lanes.pair[l];
@@ -393,8 +336,8 @@ mod avx {
     /// The `W` pairs of `lanes` from `start`, of which the first `live` are stored.
     #[target_feature(enable = "avx")]
     #[inline]
-    fn batch<F: BatchFriction>(
-        law: &HertzMindlin<F, NoCohesion>,
+    fn batch<const CAP: bool>(
+        law: &Coefficients,
         ch: &mut Chunk<'_>,
         lanes: &Lanes,
         start: usize,
@@ -493,9 +436,9 @@ mod avx {
         // AR07 App. A: scaled down, never up (min returns 1 where the ratio is NaN).
         t = t.scale(min(mul(kt, inv_kt), one));
         t = t.sub(slip.scale(kt));
-        if F::CAP {
+        if CAP {
             // Coulomb: |T| ≤ μ max(N_e, 0).
-            let cap = mul(splat(law.friction.mu()), max(ne, zero));
+            let cap = mul(splat(law.mu), max(ne, zero));
             let t2 = t.dot(t);
             let over = cmp::<_CMP_GT_OQ>(t2, mul(cap, cap));
             if any(over) {

@@ -9,12 +9,15 @@
 //!   - [`dmt::Dmt`]: YADE's DMT adhesion (a constant pull 4πR*γ in contact), the cohesive law a
 //!     YADE run reproduces exactly;
 //!   - [`hertz_mindlin_avx`]: its force pass for 3D frictional spheres, four pairs at a time
-//!     (AVX), bit for bit the scalar one.
+//!     (AVX), bit for bit the scalar one; the law's [`ContactLaw::force_batch`].
 //! - [`linear::Linear`]: GRC07 (4)–(10): spring–dashpot–Coulomb with optional adhesion and
 //!   rolling resistance; with no adhesion it is the classic cohesionless linear law.
 //! - [`slider`]: the elastic-plastic sliders (Coulomb and rolling) shared by them.
-//! - [`from_scene`]: the law of a scene's `[law]` table, in reduced units.
+//! - [`batch`]: what a batch kernel reads and writes, and whether runs use them.
+//! - [`from_scene`]: the law of a scene's `[law]` table, in reduced units: its type and its
+//!   numbers, chosen in one place ([`from_scene::with_law`]).
 
+pub mod batch;
 pub mod dmt;
 pub mod from_scene;
 pub mod hertz_mindlin;
@@ -24,6 +27,7 @@ pub mod sjkr;
 pub mod slider;
 
 use crate::geometry::Dim;
+use batch::{ChunkSum, PairChunk};
 
 /// Kinematics of one pair, as seen by the law. `n` points from i to j.
 #[derive(Clone, Copy, Debug)]
@@ -118,4 +122,10 @@ pub trait ContactLaw<D: Dim>: Copy + Send + Sync + std::fmt::Debug + 'static {
     fn without_normal_damping(&self) -> Self;
     /// Tangential force and rolling moment stored in the history (for snapshots).
     fn stored(&self, hist: &Self::History) -> (D::V, D::Ang);
+    /// The force pass over `chunk` by the law's batch kernel, where it has one for this
+    /// dimension and this CPU: it writes bit for bit what [`ContactLaw::interact`] gives pair
+    /// by pair. `None` leaves the chunk to the per-pair path, the reference.
+    fn force_batch(&self, _chunk: &mut PairChunk<'_, D, Self::History>) -> Option<ChunkSum> {
+        None
+    }
 }

@@ -2,6 +2,7 @@
 //! tangential displacement (Coulomb, AR07 (3), GRC07 (8)) and of the relative rolling rotation
 //! (GRC07 (10)). Each kind is a type, so an absent feature has no state and no cost.
 
+use super::batch::PairChunk;
 use super::PairState;
 use crate::geometry::{keep_norm_in_plane_with, Dim, VectorOps};
 
@@ -26,6 +27,13 @@ pub trait Friction: Copy + Send + Sync + std::fmt::Debug + 'static {
     ) -> D::V;
     fn force<D: Dim>(st: &Self::State<D>) -> D::V;
     fn mu(&self) -> f64;
+    /// `chunk` with its histories seen as tangential springs, where this kind keeps one (the
+    /// batch kernels' view of them); `None` for μ = 0.
+    fn springs<'x, 'y, D: Dim>(
+        _chunk: &'x mut PairChunk<'y, D, Self::State<D>>,
+    ) -> Option<&'x mut PairChunk<'y, D, Spring<D::V>>> {
+        None
+    }
 }
 
 /// μ = 0: no tangential force, no state.
@@ -84,6 +92,11 @@ fn elastic_update<D: Dim>(st: &mut Spring<D::V>, n: D::V, pivot: f64, slip: D::V
 impl Friction for Coulomb {
     type State<D: Dim> = Spring<D::V>;
     const ACTIVE: bool = true;
+    fn springs<'x, 'y, D: Dim>(
+        chunk: &'x mut PairChunk<'y, D, Spring<D::V>>,
+    ) -> Option<&'x mut PairChunk<'y, D, Spring<D::V>>> {
+        Some(chunk)
+    }
     #[inline(always)]
     fn update<D: Dim>(
         &self,
@@ -118,6 +131,11 @@ impl Friction for Coulomb {
 impl Friction for NoSlip {
     type State<D: Dim> = Spring<D::V>;
     const ACTIVE: bool = true;
+    fn springs<'x, 'y, D: Dim>(
+        chunk: &'x mut PairChunk<'y, D, Spring<D::V>>,
+    ) -> Option<&'x mut PairChunk<'y, D, Spring<D::V>>> {
+        Some(chunk)
+    }
     #[inline(always)]
     fn update<D: Dim>(
         &self,

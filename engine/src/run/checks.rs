@@ -3,7 +3,7 @@
 
 use super::output::snapshot_of;
 use super::relax::Settling;
-use super::report::{Checks, RunError};
+use super::report::{AtThreshold, Checks, RunError};
 use crate::cell::Control;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
@@ -277,25 +277,6 @@ pub(super) fn measure<D: Dim, L: ContactLaw<D>>(
         } else {
             0
         },
-    }
-}
-
-/// Contacts whose tangential force or rolling moment sits at its threshold.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct AtThreshold {
-    /// Every such contact.
-    pub all: usize,
-    /// Those whose threshold itself, μN^e (or μ_r N^e for the rolling moment), is below the
-    /// equilibrium tolerance on the net force (moment): at that accuracy the contact cannot be
-    /// told from one strictly inside its cone (GRC07 §III.A likewise ignores contacts whose
-    /// forces are below the tolerance). GRC07 §II.D's strict inequalities concern the rest.
-    pub below_tolerance: usize,
-}
-
-impl AtThreshold {
-    /// Contacts at a threshold larger than the equilibrium tolerance.
-    pub fn loaded(&self) -> usize {
-        self.all - self.below_tolerance
     }
 }
 

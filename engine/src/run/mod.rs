@@ -11,10 +11,12 @@
 pub mod checkpoint;
 pub mod checks;
 pub mod fire;
+pub mod grains;
 pub mod options;
 pub mod output;
 pub mod particles_file;
 pub mod quench;
+pub mod reference;
 pub mod relax;
 pub mod report;
 pub mod setup;
@@ -23,20 +25,17 @@ pub mod stages;
 pub use crate::contact::from_scene::{
     adhesion, dmt_law, hertz_mindlin_law, linear_law, rolling_spring, sjkr_law,
 };
+pub use grains::Grains;
 pub use options::{CheckpointSpec, DumpSpec, RunOptions, StageEndHook};
 pub use output::snapshot_of;
 pub use report::{Checks, Outcome, Progress, RunError, StepEnd, StepReport};
-pub use setup::{build_system, cell_mass, initial_grains, system_of, time_step, Grains};
+pub use setup::{build_system, cell_mass, initial_grains, system_of, time_step};
 pub use stages::{compress_until, prepared_grains, run_protocol};
 
-use crate::contact::dmt::Dmt;
-use crate::contact::hertz_mindlin::{HertzCohesion, NoCohesion as HertzNoCohesion};
-use crate::contact::linear::{CohesionModel, NoCohesion};
-use crate::contact::sjkr::Sjkr;
-use crate::contact::slider::{Coulomb, Friction, Frictionless, NoRolling, NoSlip};
+use crate::contact::from_scene::{with_law, WithLaw};
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, D2, D3};
-use crate::scene::{Law, Mu, Scene, Step};
+use crate::scene::{Mu, Scene, Step};
 use crate::snapshot::Snapshot;
 use crate::system::System;
 use checkpoint::Header;
@@ -157,6 +156,8 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
     })
 }
 
+/// Runs the DEM stages `range` with the scene's law at friction `mu`, typed by
+/// [`with_law`].
 fn dispatch_law<D: Dim>(
     ctx: &mut Ctx<D>,
     mu: Mu,
@@ -164,73 +165,28 @@ fn dispatch_law<D: Dim>(
     inside: Option<(Header, Vec<u8>)>,
     opts: &mut RunOptions,
 ) -> Result<(Snapshot, bool), RunError> {
-    let law = &ctx.scene.law.clone();
-    match law {
-        Law::HertzMindlin { sjkr, dmt, .. } => match (sjkr, dmt) {
-            (Some(k), _) => hertz_friction::<D, _>(ctx, Sjkr { k: *k }, mu, range, inside, opts),
-            (_, Some(g)) => hertz_friction::<D, _>(ctx, Dmt { gamma: *g }, mu, range, inside, opts),
-            _ => hertz_friction::<D, _>(ctx, HertzNoCohesion, mu, range, inside, opts),
-        },
-        Law::Linear { cohesion, .. } => match cohesion {
-            Some(c) => linear_friction::<D, _>(ctx, adhesion(c), mu, range, inside, opts),
-            None => linear_friction::<D, _>(ctx, NoCohesion, mu, range, inside, opts),
-        },
-    }
+    let law = ctx.scene.law.clone();
+    let run = RunLaw {
+        ctx,
+        range,
+        inside,
+        opts,
+    };
+    with_law(&law, mu, run)
 }
 
-/// The Hertz–Mindlin law of the scene with cohesion model `c` and the friction kind of `mu`.
-fn hertz_friction<D: Dim, C: HertzCohesion>(
-    ctx: &mut Ctx<D>,
-    c: C,
-    mu: Mu,
+/// [`run_law`]'s arguments other than the law, waiting for its type.
+struct RunLaw<'c, 's, 'o, 'h, D: Dim> {
+    ctx: &'c mut Ctx<'s, D>,
     range: std::ops::Range<usize>,
     inside: Option<(Header, Vec<u8>)>,
-    opts: &mut RunOptions,
-) -> Result<(Snapshot, bool), RunError> {
-    let law = &ctx.scene.law.clone();
-    match mu {
-        Mu::Finite(0.0) => {
-            let l = hertz_mindlin_law(law, Frictionless).with_cohesion(c);
-            run_law::<D, _>(ctx, l, range, inside, opts)
-        }
-        Mu::Finite(m) => {
-            let l = hertz_mindlin_law(law, Coulomb { mu: m }).with_cohesion(c);
-            run_law::<D, _>(ctx, l, range, inside, opts)
-        }
-        Mu::Infinite => {
-            let l = hertz_mindlin_law(law, NoSlip).with_cohesion(c);
-            run_law::<D, _>(ctx, l, range, inside, opts)
-        }
-    }
+    opts: &'o mut RunOptions<'h>,
 }
 
-fn linear_friction<D: Dim, C: CohesionModel>(
-    ctx: &mut Ctx<D>,
-    c: C,
-    mu: Mu,
-    range: std::ops::Range<usize>,
-    inside: Option<(Header, Vec<u8>)>,
-    opts: &mut RunOptions,
-) -> Result<(Snapshot, bool), RunError> {
-    match mu {
-        Mu::Finite(0.0) => linear_rolling::<D, C, _>(ctx, c, Frictionless, range, inside, opts),
-        Mu::Finite(m) => linear_rolling::<D, C, _>(ctx, c, Coulomb { mu: m }, range, inside, opts),
-        Mu::Infinite => linear_rolling::<D, C, _>(ctx, c, NoSlip, range, inside, opts),
-    }
-}
-
-fn linear_rolling<D: Dim, C: CohesionModel, F: Friction>(
-    ctx: &mut Ctx<D>,
-    c: C,
-    f: F,
-    range: std::ops::Range<usize>,
-    inside: Option<(Header, Vec<u8>)>,
-    opts: &mut RunOptions,
-) -> Result<(Snapshot, bool), RunError> {
-    let law = &ctx.scene.law.clone();
-    match rolling_spring(law) {
-        Some(r) => run_law::<D, _>(ctx, linear_law(law, c, f, r), range, inside, opts),
-        None => run_law::<D, _>(ctx, linear_law(law, c, f, NoRolling), range, inside, opts),
+impl<D: Dim> WithLaw<D> for RunLaw<'_, '_, '_, '_, D> {
+    type Output = Result<(Snapshot, bool), RunError>;
+    fn with<L: ContactLaw<D>>(self, law: L) -> Self::Output {
+        run_law(self.ctx, law, self.range, self.inside, self.opts)
     }
 }
 
@@ -310,6 +266,7 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::slider::Coulomb;
     use std::path::Path;
 
     /// A small dense 3D packing with springs (μ = 0.3), compressed fast.

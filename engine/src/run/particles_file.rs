@@ -2,7 +2,7 @@
 //! (`initial.particles`, `initial.cell`), for two- and few-body tests and for starts
 //! written by other programs (the exchange format's `particles.csv`).
 
-use super::setup::Grains;
+use super::grains::Grains;
 use crate::geometry::{Dim, VectorOps as _};
 use std::path::Path;
 

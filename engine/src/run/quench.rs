@@ -11,7 +11,7 @@
 //! criteria again. [`Quenched`] reports how often, the energy removed, and what the packing did
 //! from the first quench to the end of the stage.
 
-use super::relax::Reference;
+use super::reference::Reference;
 use crate::geometry::Dim;
 use serde::{Deserialize, Serialize};
 

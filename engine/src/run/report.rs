@@ -143,7 +143,7 @@ pub struct Outcome {
     pub neighbor_builds: u64,
     /// Contacts at the Coulomb or rolling threshold at the end (GRC07 §II.D: none at
     /// equilibrium, the thresholds hold as strict inequalities).
-    pub contacts_at_threshold: super::checks::AtThreshold,
+    pub contacts_at_threshold: AtThreshold,
 }
 
 impl Outcome {
@@ -187,3 +187,22 @@ impl std::fmt::Display for RunError {
 }
 
 impl std::error::Error for RunError {}
+
+/// Contacts whose tangential force or rolling moment sits at its threshold.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AtThreshold {
+    /// Every such contact.
+    pub all: usize,
+    /// Those whose threshold itself, μN^e (or μ_r N^e for the rolling moment), is below the
+    /// equilibrium tolerance on the net force (moment): at that accuracy the contact cannot be
+    /// told from one strictly inside its cone (GRC07 §III.A likewise ignores contacts whose
+    /// forces are below the tolerance). GRC07 §II.D's strict inequalities concern the rest.
+    pub below_tolerance: usize,
+}
+
+impl AtThreshold {
+    /// Contacts at a threshold larger than the equilibrium tolerance.
+    pub fn loaded(&self) -> usize {
+        self.all - self.below_tolerance
+    }
+}

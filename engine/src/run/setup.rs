@@ -1,5 +1,6 @@
 //! From a scene to a system: the initial grains, the cell mass, the time step.
 
+use super::grains::Grains;
 use crate::cell::Cell;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
@@ -9,24 +10,6 @@ use crate::protocols::lattice;
 use crate::scene::{Arrangement, Maxwell, Scene};
 use crate::snapshot::Snapshot;
 use crate::system::System;
-
-/// Grains between protocol stages, independent of the contact law: what hard-sphere stages
-/// read and write, and what a new contact law starts from.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-#[serde(bound = "")]
-pub struct Grains<D: Dim> {
-    pub l: D::V,
-    pub s: Vec<D::V>,
-    pub u: Vec<D::V>,
-    /// Spins (explicit-particle starts); empty = all at rest. Not in checkpoints:
-    /// a checkpoint holds grains only at the start of a hard-grain stage, which ends with the
-    /// grains at rest.
-    #[serde(skip)]
-    pub w: Vec<D::Ang>,
-    pub diameter: Vec<f64>,
-    pub time: f64,
-    pub step: u64,
-}
 
 /// The initial grains of a scene: random gas (GRC07 §III.A) or FCC lattice (AR07 §III).
 pub fn initial_grains<D: Dim>(scene: &Scene) -> Result<Grains<D>, String> {

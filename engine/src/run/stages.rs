@@ -7,11 +7,12 @@ use super::checks::{
     Link,
 };
 use super::checks::{FLIP_CHECKS, FLIP_CORRELATION};
+use super::grains::Grains;
 use super::options::{CheckpointSpec, RunOptions};
 use super::output::snapshot_of;
 use super::relax::StageWatch;
-use super::report::{Checks, Progress, RunError, StepEnd, StepReport};
-use super::setup::{build_system, initial_grains, Grains};
+use super::report::{AtThreshold, Checks, Progress, RunError, StepEnd, StepReport};
+use super::setup::{build_system, initial_grains};
 use crate::cell::Control;
 use crate::contact::ContactLaw;
 use crate::geometry::{Dim, VectorOps as _};
@@ -66,7 +67,7 @@ pub(super) struct Ctx<'s, D: Dim> {
     pub(super) dt: f64,
     pub(super) k_max: f64,
     pub(super) law: String,
-    pub(super) at_threshold: super::checks::AtThreshold,
+    pub(super) at_threshold: AtThreshold,
 }
 
 impl<'s, D: Dim> Ctx<'s, D> {
@@ -134,7 +135,7 @@ impl<'s, D: Dim> Ctx<'s, D> {
     pub(super) fn contacts_at_threshold<L: ContactLaw<D>>(
         &self,
         sys: &System<D, L>,
-    ) -> super::checks::AtThreshold {
+    ) -> AtThreshold {
         let plan = self.plan();
         match plan.dem_stages().last() {
             Some(s) => contacts_at_threshold(
@@ -306,7 +307,7 @@ pub fn run_protocol<D: Dim, L: ContactLaw<D>>(
     scene: &Scene,
     sys: &mut System<D, L>,
     opts: &mut RunOptions,
-) -> Result<(Vec<StepReport>, Snapshot, super::checks::AtThreshold), RunError> {
+) -> Result<(Vec<StepReport>, Snapshot, AtThreshold), RunError> {
     sys.init_forces();
     let mut ctx = Ctx::<D>::new(scene);
     ctx.plan_for_system(sys)?;

@@ -8,9 +8,11 @@
 //! Parsing rejects unknown keys; [`Scene::validate`] checks every value and names the file,
 //! the field and what is allowed.
 
+mod error;
 mod validate;
 
-pub use validate::{max_random_packing_fraction, SceneError};
+pub use error::SceneError;
+pub use validate::max_random_packing_fraction;
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

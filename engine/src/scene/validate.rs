@@ -1,9 +1,9 @@
 //! Reading a scene file and checking every value: errors name the file, the field and what
 //! is allowed.
 
+use super::error::SceneError;
 use super::{Arrangement, ForceScale, Law, Mu, RelaxMethod, Scene, Step};
-use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Largest `numerics.check_every`: a stop request is honoured within this many steps
 /// (with 1e10 the run would not stop on SIGTERM; docs/reliability.md).
@@ -16,33 +16,6 @@ pub const RESERVED_OUTPUT_NAMES: [&str; 4] = [
     "last-good.snap.json",
     ".grainbench.lock",
 ];
-
-/// An error in a scene file, naming the file, the field and what is allowed.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SceneError {
-    pub file: PathBuf,
-    /// Dotted path of the field (`law.kappa`, `protocol[1].pressure`), empty for syntax errors.
-    pub field: String,
-    pub message: String,
-}
-
-impl fmt::Display for SceneError {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        if self.field.is_empty() {
-            write!(f, "scene {}: {}", self.file.display(), self.message)
-        } else {
-            write!(
-                f,
-                "scene {}: field `{}`: {}",
-                self.file.display(),
-                self.field,
-                self.message
-            )
-        }
-    }
-}
-
-impl std::error::Error for SceneError {}
 
 /// Thinnest initial gas accepted (tests/fuzz.rs: 1e-300 overflowed the cell grids).
 pub const MIN_INITIAL_PACKING_FRACTION: f64 = 1e-3;
@@ -61,6 +34,60 @@ pub fn max_random_packing_fraction(dimension: usize) -> f64 {
         0.54
     } else {
         0.37
+    }
+}
+
+/// The checks' errors for one scene file, and the checks several tables share.
+struct Fields<'p> {
+    path: &'p Path,
+}
+
+impl Fields<'_> {
+    fn err(&self, field: &str, message: String) -> SceneError {
+        SceneError {
+            file: self.path.to_owned(),
+            field: field.to_string(),
+            message,
+        }
+    }
+
+    fn positive(&self, field: &str, x: f64) -> Result<(), SceneError> {
+        if x.is_finite() && x > 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(field, format!("must be a finite number > 0, got {x}")))
+        }
+    }
+
+    fn in_range(&self, field: &str, x: f64, lo: f64, hi: f64) -> Result<(), SceneError> {
+        if x.is_finite() && x >= lo && x <= hi {
+            Ok(())
+        } else {
+            Err(self.err(field, format!("must lie in [{lo}, {hi}], got {x}")))
+        }
+    }
+
+    /// κ sets the typical overlap h/a ~ 1/κ (AR07 (3), GRC07 §II.A); 1e-300 underflowed the
+    /// stiffness to 0 and the time step to infinity (tests/fuzz.rs).
+    fn stiffness(&self, field: &str, k: f64) -> Result<(), SceneError> {
+        if k.is_finite() && (KAPPA_MIN..=KAPPA_MAX).contains(&k) {
+            Ok(())
+        } else {
+            Err(self.err(
+                field,
+                format!("must lie in [{KAPPA_MIN}, {KAPPA_MAX:e}], got {k}: κ sets the typical overlap h/a ~ 1/κ (the papers use 10²–2·10⁵)"),
+            ))
+        }
+    }
+
+    fn mu(&self, field: &str, mu: Mu) -> Result<(), SceneError> {
+        match mu {
+            Mu::Infinite => Ok(()),
+            Mu::Finite(x) if x.is_finite() && x >= 0.0 => Ok(()),
+            Mu::Finite(x) => {
+                Err(self.err(field, format!("must be a number ≥ 0 or \"inf\", got {x}")))
+            }
+        }
     }
 }
 
@@ -86,46 +113,26 @@ impl Scene {
         Ok(scene)
     }
 
-    /// Checks every value; the first problem found is returned.
+    /// Checks every value, table by table; the first problem found is returned.
     pub fn validate(&self, path: &Path) -> Result<(), SceneError> {
-        let err = |field: &str, message: String| SceneError {
-            file: path.to_owned(),
-            field: field.to_string(),
-            message,
-        };
-        let positive = |field: &str, x: f64| -> Result<(), SceneError> {
-            if x.is_finite() && x > 0.0 {
-                Ok(())
-            } else {
-                Err(err(field, format!("must be a finite number > 0, got {x}")))
-            }
-        };
-        let in_range = |field: &str, x: f64, lo: f64, hi: f64| -> Result<(), SceneError> {
-            if x.is_finite() && x >= lo && x <= hi {
-                Ok(())
-            } else {
-                Err(err(field, format!("must lie in [{lo}, {hi}], got {x}")))
-            }
-        };
-        // κ sets the typical overlap h/a ~ 1/κ (AR07 (3), GRC07 §II.A); 1e-300 underflowed
-        // the stiffness to 0 and the time step to infinity (tests/fuzz.rs).
-        let stiffness = |field: &str, k: f64| -> Result<(), SceneError> {
-            if k.is_finite() && (KAPPA_MIN..=KAPPA_MAX).contains(&k) {
-                Ok(())
-            } else {
-                Err(err(
-                    field,
-                    format!("must lie in [{KAPPA_MIN}, {KAPPA_MAX:e}], got {k}: κ sets the typical overlap h/a ~ 1/κ (the papers use 10²–2·10⁵)"),
-                ))
-            }
-        };
+        let ck = Fields { path };
+        self.check_particles(&ck)?;
+        self.check_law(&ck)?;
+        self.check_initial(&ck)?;
+        self.check_numerics(&ck)?;
+        self.check_protocol(&ck)?;
+        self.check_output(&ck)
+    }
+
+    /// `name`, `dimension` and `[particles]`.
+    fn check_particles(&self, ck: &Fields) -> Result<(), SceneError> {
         if self.name.trim().is_empty()
             || !self
                 .name
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
         {
-            return Err(err(
+            return Err(ck.err(
                 "name",
                 format!(
                     "must be non-empty and use only letters, digits, '-', '_' and '.', got {:?}",
@@ -134,19 +141,19 @@ impl Scene {
             ));
         }
         if self.dimension != 2 && self.dimension != 3 {
-            return Err(err(
+            return Err(ck.err(
                 "dimension",
                 format!("must be 2 (disks) or 3 (spheres), got {}", self.dimension),
             ));
         }
         if self.particles.count < 2 {
-            return Err(err(
+            return Err(ck.err(
                 "particles.count",
                 format!("needs at least 2 grains, got {}", self.particles.count),
             ));
         }
         if self.particles.count > u32::MAX as usize / 64 {
-            return Err(err(
+            return Err(ck.err(
                 "particles.count",
                 format!(
                     "at most {} grains are supported, got {}",
@@ -157,29 +164,25 @@ impl Scene {
         }
         let dmin = self.particles.min_diameter;
         if !(dmin.is_finite() && dmin > 0.0 && dmin <= 1.0) {
-            return Err(err(
+            return Err(ck.err(
                 "particles.min_diameter",
                 format!("must lie in (0, 1] (units of the largest diameter a), got {dmin}"),
             ));
         }
         if let Some(k) = self.particles.classes {
             if k < 2 || dmin >= 1.0 {
-                return Err(err(
+                return Err(ck.err(
                     "particles.classes",
                     format!("needs at least 2 classes and min_diameter < 1 (got {k} classes, min_diameter = {dmin}); remove it for equal or continuous sizes"),
                 ));
             }
         }
-        let check_mu = |field: &str, mu: Mu| -> Result<(), SceneError> {
-            match mu {
-                Mu::Infinite => Ok(()),
-                Mu::Finite(x) if x.is_finite() && x >= 0.0 => Ok(()),
-                Mu::Finite(x) => Err(err(
-                    field,
-                    format!("must be a number ≥ 0 or \"inf\", got {x}"),
-                )),
-            }
-        };
+        Ok(())
+    }
+
+    /// `[law]`.
+    fn check_law(&self, ck: &Fields) -> Result<(), SceneError> {
+        let dmin = self.particles.min_diameter;
         match &self.law {
             Law::HertzMindlin {
                 kappa,
@@ -190,23 +193,23 @@ impl Scene {
                 dmt,
             } => {
                 if self.dimension != 3 {
-                    return Err(err(
+                    return Err(ck.err(
                         "law.kind",
                         "\"hertz-mindlin\" needs dimension = 3 (Hertz contacts are between spheres); use kind = \"linear\" for disks".into(),
                     ));
                 }
-                stiffness("law.kappa", *kappa)?;
-                check_mu("law.mu", *mu)?;
-                in_range("law.zeta", *zeta, 0.0, 1.0)?;
+                ck.stiffness("law.kappa", *kappa)?;
+                ck.mu("law.mu", *mu)?;
+                ck.in_range("law.zeta", *zeta, 0.0, 1.0)?;
                 if !(poisson.is_finite() && *poisson > -1.0 && *poisson < 0.5) {
-                    return Err(err(
+                    return Err(ck.err(
                         "law.poisson",
                         format!("must lie in (-1, 0.5), got {poisson}"),
                     ));
                 }
                 if let Some(k) = sjkr {
                     if !(k.is_finite() && *k >= 0.0) {
-                        return Err(err(
+                        return Err(ck.err(
                             "law.sjkr",
                             format!("must be a finite cohesion energy density ≥ 0 (units of P_ref), got {k}"),
                         ));
@@ -214,7 +217,7 @@ impl Scene {
                 }
                 if let Some(g) = dmt {
                     if !(g.is_finite() && *g >= 0.0) {
-                        return Err(err(
+                        return Err(ck.err(
                             "law.dmt",
                             format!(
                                 "must be a finite surface energy γ ≥ 0 (units of P_ref·a), got {g}"
@@ -222,7 +225,7 @@ impl Scene {
                         ));
                     }
                     if sjkr.is_some() {
-                        return Err(err(
+                        return Err(ck.err(
                             "law.dmt",
                             "cannot be combined with law.sjkr: give one cohesion law (LIGGGHTS's sjkr or YADE's dmt)".into(),
                         ));
@@ -238,14 +241,14 @@ impl Scene {
                 rolling,
                 tangential_damping,
             } => {
-                in_range("law.tangential_damping", *tangential_damping, 0.0, 1.0)?;
-                stiffness("law.kappa", *kappa)?;
-                check_mu("law.mu", *mu)?;
-                in_range("law.zeta", *zeta, 0.0, 1.0)?;
-                positive("law.kt_over_kn", *kt_over_kn)?;
+                ck.in_range("law.tangential_damping", *tangential_damping, 0.0, 1.0)?;
+                ck.stiffness("law.kappa", *kappa)?;
+                ck.mu("law.mu", *mu)?;
+                ck.in_range("law.zeta", *zeta, 0.0, 1.0)?;
+                ck.positive("law.kt_over_kn", *kt_over_kn)?;
                 if let Some(c) = cohesion {
                     if !(c.d0.is_finite() && c.d0 > 0.0 && c.d0 < 0.5 * dmin) {
-                        return Err(err(
+                        return Err(ck.err(
                             "law.cohesion.d0",
                             format!(
                                 "must lie in (0, {}) (units of a; less than the smallest radius), got {}",
@@ -256,9 +259,9 @@ impl Scene {
                     }
                 }
                 if let Some(r) = rolling {
-                    positive("law.rolling.kr", r.kr)?;
+                    ck.positive("law.rolling.kr", r.kr)?;
                     if !(r.mu_r.is_finite() && r.mu_r >= 0.0) {
-                        return Err(err(
+                        return Err(ck.err(
                             "law.rolling.mu_r",
                             format!("must be a finite number ≥ 0 (units of a), got {}", r.mu_r),
                         ));
@@ -266,6 +269,12 @@ impl Scene {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// `[initial]`.
+    fn check_initial(&self, ck: &Fields) -> Result<(), SceneError> {
+        let dmin = self.particles.min_diameter;
         let phi = self.initial.packing_fraction;
         let listed = self.initial.particles.is_some() || self.initial.grains.is_some();
         let from_file = self.initial.snapshot.is_some() || listed;
@@ -275,14 +284,14 @@ impl Scene {
             self.initial.grains.is_some(),
         ];
         if starts.iter().filter(|s| **s).count() > 1 {
-            return Err(err(
+            return Err(ck.err(
                 "initial",
                 "a scene starts from one of `snapshot`, `particles` (a CSV file) or `grains` (listed in the scene), not several".into(),
             ));
         }
         match &self.initial.cell {
             Some(cell) if !listed => {
-                return Err(err(
+                return Err(ck.err(
                     "initial.cell",
                     format!("{cell:?} is only read with `initial.particles` or `initial.grains`; remove it, or list the grains"),
                 ))
@@ -291,7 +300,7 @@ impl Scene {
                 if cell.len() != self.dimension
                     || cell.iter().any(|l| !(l.is_finite() && *l > 0.0)) =>
             {
-                return Err(err(
+                return Err(ck.err(
                     "initial.cell",
                     format!(
                         "must list {} positive side lengths (units of a), got {cell:?}",
@@ -300,7 +309,7 @@ impl Scene {
                 ))
             }
             None if listed => {
-                return Err(err(
+                return Err(ck.err(
                     "initial.cell",
                     format!(
                         "a `particles` or `grains` start needs the periodic cell's side lengths, e.g. cell = [{}]",
@@ -316,7 +325,7 @@ impl Scene {
             Arrangement::Random => {
                 let phi_max = max_random_packing_fraction(self.dimension);
                 if !(phi.is_finite() && phi >= MIN_INITIAL_PACKING_FRACTION && phi <= phi_max) {
-                    return Err(err(
+                    return Err(ck.err(
                         "initial.packing_fraction",
                         format!(
                             "must lie in [{MIN_INITIAL_PACKING_FRACTION}, {phi_max}]: a random sequential placement of {} cannot reach {phi} (the papers start at 0.13–0.52; a thinner gas only costs compression time)",
@@ -329,14 +338,14 @@ impl Scene {
                 let n = self.particles.count;
                 let k = (0..=1000usize).find(|k| 4 * k * k * k >= n).unwrap_or(0);
                 if self.dimension != 3 || 4 * k * k * k != n || dmin != 1.0 {
-                    return Err(err(
+                    return Err(ck.err(
                         "initial.arrangement",
                         format!("\"fcc\" needs dimension = 3, equal diameters (particles.min_diameter = 1) and particles.count = 4k³ (500, 864, 2048, 4000, …), got dimension {} and {n} grains", self.dimension),
                     ));
                 }
                 let fcc_max = std::f64::consts::PI / (3.0 * 2f64.sqrt());
                 if !(phi.is_finite() && phi >= MIN_INITIAL_PACKING_FRACTION && phi < fcc_max) {
-                    return Err(err(
+                    return Err(ck.err(
                         "initial.packing_fraction",
                         format!("must lie in [{MIN_INITIAL_PACKING_FRACTION}, {fcc_max:.4}) for an FCC lattice, got {phi}"),
                     ));
@@ -344,7 +353,7 @@ impl Scene {
             }
         }
         if !(self.initial.rms_velocity.is_finite() && self.initial.rms_velocity >= 0.0) {
-            return Err(err(
+            return Err(ck.err(
                 "initial.rms_velocity",
                 format!(
                     "must be a finite number ≥ 0, got {}",
@@ -352,19 +361,24 @@ impl Scene {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// `[numerics]`.
+    fn check_numerics(&self, ck: &Fields) -> Result<(), SceneError> {
         let n = &self.numerics;
-        in_range("numerics.dt_fraction", n.dt_fraction, 1e-6, 0.5)?;
-        positive("numerics.stiffness_force", n.stiffness_force)?;
-        in_range("numerics.skin", n.skin, 1e-4, 1.0)?;
-        positive("numerics.cell_mass", n.cell_mass)?;
+        ck.in_range("numerics.dt_fraction", n.dt_fraction, 1e-6, 0.5)?;
+        ck.positive("numerics.stiffness_force", n.stiffness_force)?;
+        ck.in_range("numerics.skin", n.skin, 1e-4, 1.0)?;
+        ck.positive("numerics.cell_mass", n.cell_mass)?;
         if let Some(g) = n.servo_gain {
-            in_range("numerics.servo_gain", g, 1e-12, 1e3)?;
+            ck.in_range("numerics.servo_gain", g, 1e-12, 1e3)?;
             if let Some(k) = self
                 .protocol
                 .iter()
                 .position(|s| matches!(s, Step::Compress { pressure, .. } if *pressure <= 0.0))
             {
-                return Err(err(
+                return Err(ck.err(
                     "numerics.servo_gain",
                     format!(
                         "the servo's rate g·(σ − P)/P needs P > 0, but protocol step {} compresses to P = 0: remove servo_gain (the cell-mass control of AR07 (7) takes P = 0)",
@@ -374,7 +388,7 @@ impl Scene {
             }
         }
         if !(1..=MAX_CHECK_EVERY).contains(&n.check_every) {
-            return Err(err(
+            return Err(ck.err(
                 "numerics.check_every",
                 format!(
                     "is {}, must be in [1, {MAX_CHECK_EVERY}]: the criteria, max_time, progress and a stop request (Ctrl-C, SIGTERM) are looked at only every check_every steps, and a check costs about one step",
@@ -382,9 +396,14 @@ impl Scene {
                 ),
             ));
         }
-        in_range("numerics.max_overlap", n.max_overlap, 1e-6, 1.0)?;
+        ck.in_range("numerics.max_overlap", n.max_overlap, 1e-6, 1.0)?;
+        Ok(())
+    }
+
+    /// `[[protocol]]`: each step, by its kind and by the settings every DEM step shares.
+    fn check_protocol(&self, ck: &Fields) -> Result<(), SceneError> {
         if self.protocol.is_empty() {
-            return Err(err(
+            return Err(ck.err(
                 "protocol",
                 "needs at least one step ([[protocol]] with kind = \"compress\", \"fixed-volume\", \"aggregate\", \"pressure-program\", \"hard-sphere-mix\", \"grow\" or \"expand\")"
                     .into(),
@@ -392,181 +411,211 @@ impl Scene {
         }
         let cohesive = self.law.cohesion().is_some();
         for (k, step) in self.protocol.iter().enumerate() {
-            let f = |name: &str| format!("protocol[{k}].{name}");
-            let check_pressure = |name: &str, pressure: f64| -> Result<(), SceneError> {
-                if !(pressure.is_finite() && pressure >= 0.0) {
-                    return Err(err(
-                        &f(name),
-                        format!("must be a finite number ≥ 0, got {pressure}"),
-                    ));
-                }
-                if pressure == 0.0 && !cohesive {
-                    return Err(err(
-                        &f(name),
-                        "must be > 0 without cohesion (a cohesionless packing cannot hold at P = 0)"
-                            .into(),
-                    ));
-                }
+            self.check_step_kind(ck, k, step, cohesive)?;
+            self.check_step_settings(ck, k, step, cohesive)?;
+        }
+        Ok(())
+    }
+
+    /// Protocol step `k`: what its kind requires (pressures, factors, targets).
+    fn check_step_kind(
+        &self,
+        ck: &Fields,
+        k: usize,
+        step: &Step,
+        cohesive: bool,
+    ) -> Result<(), SceneError> {
+        let f = |name: &str| format!("protocol[{k}].{name}");
+        let check_pressure = |name: &str, pressure: f64| -> Result<(), SceneError> {
+            if !(pressure.is_finite() && pressure >= 0.0) {
+                return Err(ck.err(
+                    &f(name),
+                    format!("must be a finite number ≥ 0, got {pressure}"),
+                ));
+            }
+            if pressure == 0.0 && !cohesive {
+                return Err(ck.err(
+                    &f(name),
+                    "must be > 0 without cohesion (a cohesionless packing cannot hold at P = 0)"
+                        .into(),
+                ));
+            }
+            Ok(())
+        };
+        // Levels of a program: each the previous one times (or divided by) the factor.
+        let check_factor = |factor: f64| -> Result<(), SceneError> {
+            if factor.is_finite() && factor > 1.0 + 1e-6 && factor <= 100.0 {
                 Ok(())
-            };
-            // Levels of a program: each the previous one times (or divided by) the factor.
-            let check_factor = |factor: f64| -> Result<(), SceneError> {
-                if factor.is_finite() && factor > 1.0 + 1e-6 && factor <= 100.0 {
-                    Ok(())
-                } else {
-                    Err(err(
-                        &f("factor"),
-                        format!("must lie in (1, 100] (each level is the previous one times or divided by it), got {factor}"),
-                    ))
-                }
-            };
-            match step {
-                Step::Compress {
-                    pressure,
-                    inertia_cap,
-                    ..
-                } => {
-                    check_pressure("pressure", *pressure)?;
-                    positive(&f("inertia_cap"), *inertia_cap)?;
-                }
-                Step::PressureProgram {
-                    from,
-                    to,
-                    factor,
-                    inertia_cap,
-                    ..
-                } => {
-                    check_pressure("from", *from)?;
-                    check_pressure("to", *to)?;
-                    if *from == 0.0 || *to == 0.0 {
-                        return Err(err(
-                            &f(if *from == 0.0 { "from" } else { "to" }),
-                            "must be > 0 (levels are multiples of each other)".into(),
-                        ));
-                    }
-                    check_factor(*factor)?;
-                    positive(&f("inertia_cap"), *inertia_cap)?;
-                }
-                Step::KappaRamp {
-                    from,
-                    to,
-                    factor,
-                    pressure,
-                    inertia_cap,
-                    ..
-                } => {
-                    stiffness(&f("from"), *from)?;
-                    stiffness(&f("to"), *to)?;
-                    check_pressure("pressure", *pressure)?;
-                    check_factor(*factor)?;
-                    positive(&f("inertia_cap"), *inertia_cap)?;
-                }
-                Step::HardSphereMix {
-                    collisions_per_grain,
-                } => in_range(&f("collisions_per_grain"), *collisions_per_grain, 1e-3, 1e6)?,
-                Step::Grow {
-                    packing_fraction,
-                    rate,
-                } => {
-                    let top = if self.dimension == 2 { 0.9 } else { 0.74 };
-                    in_range(&f("packing_fraction"), *packing_fraction, 0.0, top)?;
-                    in_range(&f("rate"), *rate, 1e-9, 10.0)?;
-                }
-                Step::Expand { factor } => in_range(&f("factor"), *factor, 1.0, 2.0)?,
-                Step::FixedVolume { .. } | Step::Aggregate { .. } => {}
+            } else {
+                Err(ck.err(
+                    &f("factor"),
+                    format!("must lie in (1, 100] (each level is the previous one times or divided by it), got {factor}"),
+                ))
             }
-            if let Some(mu) = step.mu() {
-                check_mu(&f("mu"), mu)?;
+        };
+        match step {
+            Step::Compress {
+                pressure,
+                inertia_cap,
+                ..
+            } => {
+                check_pressure("pressure", *pressure)?;
+                ck.positive(&f("inertia_cap"), *inertia_cap)?;
             }
-            if let Some(kappa) = step.kappa() {
-                stiffness(&f("kappa"), kappa)?;
+            Step::PressureProgram {
+                from,
+                to,
+                factor,
+                inertia_cap,
+                ..
+            } => {
+                check_pressure("from", *from)?;
+                check_pressure("to", *to)?;
+                if *from == 0.0 || *to == 0.0 {
+                    return Err(ck.err(
+                        &f(if *from == 0.0 { "from" } else { "to" }),
+                        "must be > 0 (levels are multiples of each other)".into(),
+                    ));
+                }
+                check_factor(*factor)?;
+                ck.positive(&f("inertia_cap"), *inertia_cap)?;
             }
-            if step.is_dem() {
-                positive(&f("max_time"), step.max_time())?;
-                let c = step.criteria();
-                positive(&f("criteria.force"), c.force)?;
-                positive(&f("criteria.moment"), c.moment)?;
-                positive(&f("criteria.pressure"), c.pressure)?;
-                positive(&f("criteria.kinetic"), c.kinetic)?;
-                in_range(&f("criteria.window"), c.window, 0.0, step.max_time())?;
-                if let Some(r) = step.relax() {
-                    match r.method {
-                        RelaxMethod::Damping => positive(&f("relax.damping"), r.damping)?,
-                        // AR07 §III.A: only frictionless, non-adhesive equilibria are the
-                        // minima of an energy that FIRE can descend to.
-                        RelaxMethod::Fire => {
-                            let mu = step.mu().unwrap_or(self.law.mu()).value();
-                            let rolling = matches!(
-                                self.law,
-                                Law::Linear {
-                                    rolling: Some(_),
-                                    ..
-                                }
-                            );
-                            let why = if mu != 0.0 {
-                                Some(format!("needs frictionless contacts: this step has μ = {mu}, and friction makes the contact forces depend on the path, not on an energy (AR07 §III.A); set mu = 0.0 or use method = \"damping\""))
-                            } else if self.law.attractive() || rolling {
-                                Some("needs a non-adhesive law without rolling resistance (AR07 §III.A: the equilibria of frictionless, non-adhesive grains minimise the enthalpy); use method = \"damping\"".to_string())
-                            } else if r.damping != 0.0
-                                || r.tangential_zeta != 0.0
-                                || r.free_rollers
-                                || r.mean_stress
-                            {
-                                Some("takes only settle_time and settle_factor: damping, tangential_zeta, free_rollers and mean_stress belong to method = \"damping\"; remove them".to_string())
-                            } else {
-                                None
-                            };
-                            if let Some(why) = why {
-                                return Err(err(&f("relax.method"), format!("\"fire\" {why}")));
+            Step::KappaRamp {
+                from,
+                to,
+                factor,
+                pressure,
+                inertia_cap,
+                ..
+            } => {
+                ck.stiffness(&f("from"), *from)?;
+                ck.stiffness(&f("to"), *to)?;
+                check_pressure("pressure", *pressure)?;
+                check_factor(*factor)?;
+                ck.positive(&f("inertia_cap"), *inertia_cap)?;
+            }
+            Step::HardSphereMix {
+                collisions_per_grain,
+            } => ck.in_range(&f("collisions_per_grain"), *collisions_per_grain, 1e-3, 1e6)?,
+            Step::Grow {
+                packing_fraction,
+                rate,
+            } => {
+                let top = if self.dimension == 2 { 0.9 } else { 0.74 };
+                ck.in_range(&f("packing_fraction"), *packing_fraction, 0.0, top)?;
+                ck.in_range(&f("rate"), *rate, 1e-9, 10.0)?;
+            }
+            Step::Expand { factor } => ck.in_range(&f("factor"), *factor, 1.0, 2.0)?,
+            Step::FixedVolume { .. } | Step::Aggregate { .. } => {}
+        }
+        Ok(())
+    }
+
+    /// Protocol step `k`: μ, κ, criteria, relaxation and the kind the law allows.
+    fn check_step_settings(
+        &self,
+        ck: &Fields,
+        k: usize,
+        step: &Step,
+        cohesive: bool,
+    ) -> Result<(), SceneError> {
+        let f = |name: &str| format!("protocol[{k}].{name}");
+        if let Some(mu) = step.mu() {
+            ck.mu(&f("mu"), mu)?;
+        }
+        if let Some(kappa) = step.kappa() {
+            ck.stiffness(&f("kappa"), kappa)?;
+        }
+        if step.is_dem() {
+            ck.positive(&f("max_time"), step.max_time())?;
+            let c = step.criteria();
+            ck.positive(&f("criteria.force"), c.force)?;
+            ck.positive(&f("criteria.moment"), c.moment)?;
+            ck.positive(&f("criteria.pressure"), c.pressure)?;
+            ck.positive(&f("criteria.kinetic"), c.kinetic)?;
+            ck.in_range(&f("criteria.window"), c.window, 0.0, step.max_time())?;
+            if let Some(r) = step.relax() {
+                match r.method {
+                    RelaxMethod::Damping => ck.positive(&f("relax.damping"), r.damping)?,
+                    // AR07 §III.A: only frictionless, non-adhesive equilibria are the
+                    // minima of an energy that FIRE can descend to.
+                    RelaxMethod::Fire => {
+                        let mu = step.mu().unwrap_or(self.law.mu()).value();
+                        let rolling = matches!(
+                            self.law,
+                            Law::Linear {
+                                rolling: Some(_),
+                                ..
                             }
+                        );
+                        let why = if mu != 0.0 {
+                            Some(format!("needs frictionless contacts: this step has μ = {mu}, and friction makes the contact forces depend on the path, not on an energy (AR07 §III.A); set mu = 0.0 or use method = \"damping\""))
+                        } else if self.law.attractive() || rolling {
+                            Some("needs a non-adhesive law without rolling resistance (AR07 §III.A: the equilibria of frictionless, non-adhesive grains minimise the enthalpy); use method = \"damping\"".to_string())
+                        } else if r.damping != 0.0
+                            || r.tangential_zeta != 0.0
+                            || r.free_rollers
+                            || r.mean_stress
+                        {
+                            Some("takes only settle_time and settle_factor: damping, tangential_zeta, free_rollers and mean_stress belong to method = \"damping\"; remove them".to_string())
+                        } else {
+                            None
+                        };
+                        if let Some(why) = why {
+                            return Err(ck.err(&f("relax.method"), format!("\"fire\" {why}")));
                         }
                     }
-                    in_range(&f("relax.settle_time"), r.settle_time, 0.0, step.max_time())?;
-                    in_range(&f("relax.tangential_zeta"), r.tangential_zeta, 0.0, 1.0)?;
-                    in_range(&f("relax.settle_factor"), r.settle_factor, 1.0, 1e6)?;
-                    let no_rr = matches!(self.law, Law::Linear { rolling: None, .. });
-                    if r.free_rollers && !(cohesive && no_rr) {
-                        return Err(err(
-                            &f("relax.free_rollers"),
-                            "free rollers (GRC07 §III.A) are one-contact grains of a cohesive law without rolling resistance; remove it, or use law.cohesion without law.rolling".into(),
-                        ));
-                    }
-                    if r.tangential_zeta > 0.0 && !matches!(self.law, Law::Linear { .. }) {
-                        return Err(err(
-                            &f("relax.tangential_zeta"),
-                            "tangential and rolling dashpots exist in the linear law only; use 0 with the Hertz–Mindlin law".into(),
-                        ));
-                    }
                 }
-                let zero_pressure = matches!(
-                    step,
-                    Step::Compress { pressure, .. } | Step::KappaRamp { pressure, .. } if *pressure == 0.0
-                );
-                if c.scale == ForceScale::Pressure && zero_pressure {
-                    return Err(err(
-                        &f("criteria.scale"),
-                        "\"pressure\" measures the criteria in units of the pressure, here 0: no state could meet them; use criteria = { preset = \"grc07\" } (scale \"cohesion\", units of F0)".into(),
+                ck.in_range(&f("relax.settle_time"), r.settle_time, 0.0, step.max_time())?;
+                ck.in_range(&f("relax.tangential_zeta"), r.tangential_zeta, 0.0, 1.0)?;
+                ck.in_range(&f("relax.settle_factor"), r.settle_factor, 1.0, 1e6)?;
+                let no_rr = matches!(self.law, Law::Linear { rolling: None, .. });
+                if r.free_rollers && !(cohesive && no_rr) {
+                    return Err(ck.err(
+                        &f("relax.free_rollers"),
+                        "free rollers (GRC07 §III.A) are one-contact grains of a cohesive law without rolling resistance; remove it, or use law.cohesion without law.rolling".into(),
                     ));
                 }
-                if c.scale == ForceScale::Cohesion && !cohesive {
-                    return Err(err(
-                        &f("criteria.scale"),
-                        "\"cohesion\" needs a cohesive law (law.cohesion); use \"pressure\"".into(),
+                if r.tangential_zeta > 0.0 && !matches!(self.law, Law::Linear { .. }) {
+                    return Err(ck.err(
+                        &f("relax.tangential_zeta"),
+                        "tangential and rolling dashpots exist in the linear law only; use 0 with the Hertz–Mindlin law".into(),
                     ));
                 }
             }
-            if matches!(step, Step::Aggregate { .. }) && !cohesive {
-                return Err(err(
-                    &f("kind"),
-                    "\"aggregate\" needs a cohesive law (law.cohesion): cohesionless grains never form one cluster".into(),
+            let zero_pressure = matches!(
+                step,
+                Step::Compress { pressure, .. } | Step::KappaRamp { pressure, .. } if *pressure == 0.0
+            );
+            if c.scale == ForceScale::Pressure && zero_pressure {
+                return Err(ck.err(
+                    &f("criteria.scale"),
+                    "\"pressure\" measures the criteria in units of the pressure, here 0: no state could meet them; use criteria = { preset = \"grc07\" } (scale \"cohesion\", units of F0)".into(),
+                ));
+            }
+            if c.scale == ForceScale::Cohesion && !cohesive {
+                return Err(ck.err(
+                    &f("criteria.scale"),
+                    "\"cohesion\" needs a cohesive law (law.cohesion); use \"pressure\"".into(),
                 ));
             }
         }
+        if matches!(step, Step::Aggregate { .. }) && !cohesive {
+            return Err(ck.err(
+                &f("kind"),
+                "\"aggregate\" needs a cohesive law (law.cohesion): cohesionless grains never form one cluster".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// `[output]`.
+    fn check_output(&self, ck: &Fields) -> Result<(), SceneError> {
         if self.output.snapshot.is_empty()
             || self.output.snapshot.contains('/')
             || self.output.snapshot.contains('\\')
         {
-            return Err(err(
+            return Err(ck.err(
                 "output.snapshot",
                 format!(
                     "must be a plain file name (no directories), got {:?}",
@@ -576,13 +625,13 @@ impl Scene {
         }
         if let Some(t) = self.output.trace_every {
             if !(t.is_finite() && t > 0.0) {
-                return Err(err(
+                return Err(ck.err(
                     "output.trace_every",
                     format!("must be a positive time in the scene's reduced units, got {t}"),
                 ));
             }
             if self.particles.count > super::MAX_TRACE_GRAINS {
-                return Err(err(
+                return Err(ck.err(
                     "output.trace_every",
                     format!(
                         "a trace keeps every frame: for few-body scenes (at most {} grains), this one has {}; remove it",
@@ -594,7 +643,7 @@ impl Scene {
         }
         let name = self.output.snapshot.as_str();
         if matches!(name, "." | "..") || RESERVED_OUTPUT_NAMES.contains(&name) {
-            return Err(err(
+            return Err(ck.err(
                 "output.snapshot",
                 format!(
                     "{name:?} is a name the run itself uses in the output directory ({}): the files would overwrite each other; choose another name, e.g. \"final.snap.json\"",

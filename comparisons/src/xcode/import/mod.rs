@@ -11,13 +11,14 @@
 //! Each reader returns [`Raw`] grains and contacts; [`assemble`] builds the snapshot (branch
 //! vectors and gaps from the positions, contact stress from the forces, AR07 (8)).
 
+pub mod by_code;
 pub mod generic;
 pub mod lammps;
 pub mod liggghts;
 pub mod trace;
 pub mod yade;
 
-use super::code::Code;
+pub use by_code::read;
 use grainbench_engine::snapshot::{self, Snapshot, Vector};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -120,24 +121,6 @@ pub struct RawContact {
     pub tangential: Vec<f64>,
     /// Rolling moment on j (empty: none).
     pub rolling: Vec<f64>,
-}
-
-/// Reads the final state a deck of `code` left in `dir`.
-pub fn read(code: Code, dir: &Path, meta: &Meta) -> Result<Snapshot, ImportError> {
-    let raw = match code {
-        Code::Lammps | Code::Lammps2025 => lammps::read_dir(dir, meta)?,
-        Code::Liggghts => liggghts::read_dir(dir, meta)?,
-        Code::Yade => yade::read_dir(dir, meta)?,
-        // The code's output directory of the exchange format.
-        Code::Generic | Code::Adapter(_) => {
-            let out = dir.join(crate::xcode::decks::generic::OUTPUT_DIR);
-            generic::read_dir(if out.is_dir() { &out } else { dir }, meta)?
-        }
-        Code::Rust => {
-            return Snapshot::read(&dir.join("final.json")).map_err(|e| ImportError::new(dir, e))
-        }
-    };
-    assemble(raw, meta).map_err(|m| ImportError::new(dir, m))
 }
 
 /// Builds a snapshot: positions wrapped into `[0, L)`, branch vectors by the nearest image,
