@@ -9,26 +9,29 @@
 //! [`options`] how it is driven, [`checkpoint`] the resumable state on disk.
 
 pub mod checkpoint;
-pub mod checks;
-pub mod fire;
-pub mod grains;
-pub mod options;
-pub mod output;
-pub mod particles_file;
-pub mod quench;
-pub mod reference;
-pub mod relax;
-pub mod report;
-pub mod setup;
-pub mod stages;
+pub(crate) mod checks;
+pub(crate) mod fire;
+pub(crate) mod grains;
+pub(crate) mod options;
+pub(crate) mod output;
+pub(crate) mod particles_file;
+pub(crate) mod quench;
+pub(crate) mod reference;
+pub(crate) mod relax;
+pub(crate) mod report;
+pub(crate) mod setup;
+pub(crate) mod stages;
 
 pub use crate::contact::from_scene::{
     adhesion, dmt_law, hertz_mindlin_law, linear_law, rolling_spring, sjkr_law,
 };
+pub use fire::FireStats;
 pub use grains::Grains;
 pub use options::{CheckpointSpec, DumpSpec, RunOptions, StageEndHook};
 pub use output::snapshot_of;
-pub use report::{Checks, Outcome, Progress, RunError, StepEnd, StepReport};
+pub use quench::Quenched;
+pub use relax::Relaxation;
+pub use report::{AtThreshold, Checks, Outcome, Progress, RunError, StepEnd, StepReport};
 pub use setup::{build_system, cell_mass, initial_grains, system_of, time_step};
 pub use stages::{compress_until, prepared_grains, run_protocol};
 
