@@ -1,6 +1,7 @@
 //! The Hertz–Mindlin force pass of 3D frictional spheres, four pairs at a time with AVX
 //! (x86-64): AR07 (1)–(5), the spring transport (B3)–(B5) and Walton's rescaling (App. A) in
-//! batch form. Chosen at run time when the CPU has AVX (`System::simd`); the scalar path
+//! batch form: `HertzMindlin`'s `ContactLaw::force_batch`, taken at run time where the CPU
+//! has AVX and `System::simd` is on; the scalar path
 //! ([`super::hertz_mindlin::HertzMindlin::interact`] behind `System::pair_with`) stays the
 //! reference.
 //!
