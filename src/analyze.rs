@@ -1,11 +1,88 @@
 //! `grainbench analyze`: the packing metrics of a snapshot, or of another code's final dumps.
 
-use crate::common::{contact_stiffness, load_scene};
+use crate::common::load_scene;
 use anyhow::{anyhow, bail, Context, Result};
 use grainbench_comparisons::metrics::{analyze as measure, stiffness::ContactStiffness, Options};
 use grainbench_comparisons::xcode::{import, Code};
 use grainbench_engine::Snapshot;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// The arguments of `grainbench analyze`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A grainbench snapshot, or with --from a directory of another code's final dumps.
+    pub snapshot: PathBuf,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Read the final state of another code from a directory: `lammps` (dump custom +
+    /// dump local), `liggghts` (dump custom + pair/gran/local), `yade` (text export); formats
+    /// in docs/external-formats/. Our decks write a `deck.json` beside them; for dumps of
+    /// your own deck give --dimension, --mu, --pressure and --force-unit.
+    #[arg(long, value_name = "CODE")]
+    pub from: Option<String>,
+    /// With --from: 2 or 3 (overrides deck.json).
+    #[arg(long)]
+    pub dimension: Option<usize>,
+    /// With --from: μ of the last stage, a number or `inf` (overrides deck.json).
+    #[arg(long, value_name = "MU")]
+    pub mu: Option<String>,
+    /// With --from: target pressure of the last stage, or `none` for a fixed cell (overrides
+    /// deck.json).
+    #[arg(long, value_name = "P")]
+    pub pressure: Option<String>,
+    /// With --from: the force unit of the dumps, e.g. "P_ref a^2" or F0 (overrides deck.json).
+    #[arg(long, value_name = "TEXT")]
+    pub force_unit: Option<String>,
+    /// With --from: an adhesive law (pairs within the attraction range are dumped).
+    #[arg(long)]
+    pub cohesive: bool,
+    /// Also write the state read as a grainbench snapshot.
+    #[arg(long, value_name = "FILE")]
+    pub write: Option<PathBuf>,
+    /// Also the elastic moduli B, G with their Voigt and Reuss estimates, the energy
+    /// concentration of a pressure increment (GRC08 §VI) and the mechanisms and force
+    /// indeterminacy of the network (GRC07 App. A), from its stiffness matrix.
+    #[arg(long)]
+    pub moduli: bool,
+    /// With --moduli: the scene (file or embedded name) whose law gives the contact
+    /// stiffnesses (default: the scene the snapshot names).
+    #[arg(long, value_name = "SCENE")]
+    pub scene: Option<String>,
+    /// Also write the snapshot for ParaView into DIR: particles.vtu (grains with diameter,
+    /// velocity, spin, contact count), contacts.vtu (lines with normal and tangential
+    /// force) and snapshot.pvd grouping them.
+    #[arg(long, value_name = "DIR")]
+    pub vtk: Option<PathBuf>,
+    /// Cohesive snapshots: the normal force, in F0, at or below which an interaction counts
+    /// as unstressed in GRC07 T.VI's split z = z+ + z− + z0 (default 1e-4, T.VI's
+    /// tolerance; GRC07 §IV.C separates loops with RR at 1e-2).
+    #[arg(long, value_name = "F")]
+    pub cohesive_tolerance: Option<f64>,
+}
+
+/// `grainbench analyze`.
+pub fn command(a: Args) -> Result<i32> {
+    analyze(
+        &a.snapshot,
+        a.json,
+        a.from.as_deref(),
+        &DumpMeta {
+            dimension: a.dimension,
+            mu: a.mu,
+            pressure: a.pressure,
+            force_unit: a.force_unit,
+            cohesive: a.cohesive,
+        },
+        a.write.as_deref(),
+        &Extra {
+            moduli: a.moduli,
+            scene: a.scene.as_deref(),
+            vtk: a.vtk.as_deref(),
+            cohesive_tolerance: a.cohesive_tolerance,
+        },
+    )
+}
 
 /// What a user's own dumps do not say (`analyze --from` without a `deck.json`), or overrides
 /// of it.
@@ -125,7 +202,7 @@ pub struct Extra<'a> {
 
 /// `grainbench analyze SNAPSHOT [--from CODE] [--write FILE] [--json] [--moduli [--scene S]] [--vtk DIR]
 /// [--cohesive-tolerance F]`.
-pub fn analyze(
+fn analyze(
     path: &Path,
     json: bool,
     from: Option<&str>,
@@ -208,5 +285,5 @@ fn stiffness_of(snap: &Snapshot, scene: Option<&str>) -> Result<ContactStiffness
             snap.scene
         ),
     })?;
-    contact_stiffness(&sc, snap).map_err(|e| anyhow!("--scene {spec}: {e}"))
+    ContactStiffness::of_scene(&sc, snap).map_err(|e| anyhow!("--scene {spec}: {e}"))
 }

@@ -83,27 +83,10 @@ pub fn analysis_of(snap: &Snapshot) -> Analysis {
     analyze(snap, &Default::default())
 }
 
-/// The contact stiffnesses of `scene`'s law for `snap`: the κ of the scene's last stage, the
-/// snapshot's μ.
-pub fn contact_stiffness(scene: &Scene, snap: &Snapshot) -> Result<ContactStiffness, String> {
-    if scene.dimension != snap.dimension {
-        return Err(format!(
-            "a {}D scene for a {}D snapshot",
-            scene.dimension, snap.dimension
-        ));
-    }
-    let kappa = scene
-        .protocol
-        .last()
-        .and_then(|s| s.kappa())
-        .unwrap_or_else(|| scene.law.kappa());
-    ContactStiffness::of_law(&scene.law, kappa, snap.mu)
-}
-
 /// The packing metrics of a snapshot with the elastic moduli of `scene`'s law (`compare`:
 /// every code's final state under the one law).
 pub fn analysis_with_moduli(snap: &Snapshot, scene: &Scene) -> Analysis {
-    match contact_stiffness(scene, snap) {
+    match ContactStiffness::of_scene(scene, snap) {
         Ok(k) => analyze(
             snap,
             &Options {

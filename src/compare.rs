@@ -3,9 +3,10 @@
 //! them with the same `comparisons/` code, and writes the table (Markdown, CSV, JSON) and the
 //! overlaid P(f) and g(r) plots. `grainbench golden update` records the results.
 
-use crate::common::{analysis_with_moduli, load_scene, seed_list, STOP};
-use crate::external::{self, clean_version};
-use crate::reproduce::{pf_plot, pf_points};
+use crate::common::{
+    analysis_with_moduli, install_stop_handler, load_scene, on_threads, seed_list, STOP,
+};
+use crate::external;
 use crate::run::{run, RunFlags};
 use crate::xcode;
 use anyhow::{bail, Context, Result};
@@ -13,12 +14,12 @@ use grainbench_comparisons::metrics::impact::ImpactReport;
 use grainbench_comparisons::metrics::pair_history;
 use grainbench_comparisons::metrics::Analysis;
 use grainbench_comparisons::outcome::Outcome;
-use grainbench_comparisons::report::plots;
+use grainbench_comparisons::report::figures;
 use grainbench_comparisons::xcode::crosscode::{
     self, Bands, CodeImpact, CodePairs, CodeResult, Comparison,
 };
 use grainbench_comparisons::xcode::decks::generic::OUT_TRACE_CONTACTS;
-use grainbench_comparisons::xcode::decks::{self, Code, StageKind, Start};
+use grainbench_comparisons::xcode::decks::{Code, StageKind, Start};
 use grainbench_comparisons::xcode::import::{self, Meta};
 use grainbench_comparisons::xcode::seeds;
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
@@ -26,19 +27,46 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
+#[derive(clap::Args, Debug)]
 pub struct Args {
+    /// Scene file or embedded scene name.
     pub scene: String,
+    /// Codes, comma-separated: rust, lammps (Debian's 2021), lammps-2025, liggghts, yade
+    /// (default: all), and NAME=PATH.toml for any code with an adapter file
+    /// (docs/exchange-format.md).
+    #[arg(long, value_delimiter = ',')]
     pub codes: Vec<String>,
-    /// Seeds to compare (empty: the scene's).
+    /// Seeds, comma-separated (default: the scene's). With several, each seed is compared
+    /// in `seed-K/` and `compare-seeds.md` gives every code's mean ± s.d., with P(f) per
+    /// code over its seeds' band.
+    #[arg(long, value_delimiter = ',')]
     pub seeds: Vec<u64>,
+    /// Output directory (default: `runs/compare/<scene>`).
+    #[arg(long, short)]
     pub out: Option<PathBuf>,
+    /// Wall-time limit of each external run, seconds.
+    #[arg(long, default_value_t = 3600.0, value_name = "SECS")]
     pub time_limit: f64,
+    /// Run LAMMPS and LIGGGHTS under `mpirun -np K`.
+    #[arg(long, value_name = "K")]
     pub np: Option<usize>,
-    pub quiet: bool,
+    /// Worker threads of our engine.
+    #[arg(long, short = 'j')]
+    pub threads: Option<usize>,
+    /// Every metric in the terminal table (the files always have all).
+    #[arg(long)]
     pub all_metrics: bool,
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
-pub fn compare(a: &Args) -> Result<i32> {
+/// `grainbench compare`.
+pub fn command(a: Args) -> Result<i32> {
+    install_stop_handler();
+    on_threads(a.threads, || compare(&a))
+}
+
+fn compare(a: &Args) -> Result<i32> {
     let scene = load_scene(&a.scene)?;
     let codes = if a.codes.is_empty() {
         Code::ALL.to_vec()
@@ -111,7 +139,11 @@ pub fn compare(a: &Args) -> Result<i32> {
         &out.join("compare-seeds.json"),
         (serde_json::to_string_pretty(&summary)? + "\n").as_bytes(),
     )?;
-    let svgs = seed_band_plots(&out, &per_code);
+    let bands = figures::seed_bands(&out, &per_code);
+    for w in &bands.warnings {
+        eprintln!("warning: {w}");
+    }
+    let svgs: Vec<PathBuf> = bands.svgs().cloned().collect();
     grainbench_comparisons::report::html::write(
         &out,
         &format!(
@@ -136,30 +168,6 @@ pub fn compare(a: &Args) -> Result<i32> {
         return Ok(130);
     }
     Ok(if summary.failures.is_empty() { 0 } else { 1 })
-}
-
-/// P(f) of every code as the mean of its seeds over the band of their spread (`pf.svg/png`).
-fn seed_band_plots(out: &Path, per_code: &[(String, Vec<Analysis>)]) -> Vec<PathBuf> {
-    let bands: Vec<(String, plots::SeedBand)> = per_code
-        .iter()
-        .filter_map(|(code, list)| {
-            let pf: Vec<Vec<(f64, f64)>> = list.iter().map(pf_points).collect();
-            let label = format!("{code} (mean of {} seeds, band: their spread)", pf.len());
-            Some((label, plots::seed_band(&pf)?))
-        })
-        .collect();
-    let series: Vec<plots::Series> = bands
-        .iter()
-        .map(|(l, b)| plots::Series::new(l, &b.mean).with_band(&b.band))
-        .collect();
-    if series.is_empty() {
-        return Vec::new();
-    }
-    let like = per_code.first().and_then(|(_, l)| l.first());
-    pf_plot(out, &series, like)
-        .into_iter()
-        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
-        .collect()
 }
 
 /// One seed: every code run from the scene's start, measured and compared.
@@ -281,11 +289,11 @@ fn write_outputs(
     )?;
     let labels: Vec<String> = analyses.iter().map(|(c, _)| c.clone()).collect();
     let analyses: Vec<Analysis> = analyses.into_iter().map(|(_, a)| a).collect();
-    let plots = crate::reproduce::write_plots(out, &labels, &analyses, false, None);
-    let svgs: Vec<PathBuf> = plots
-        .into_iter()
-        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
-        .collect();
+    let plots = figures::packings(out, &labels, &analyses, false, None);
+    for w in &plots.warnings {
+        eprintln!("warning: {w}");
+    }
+    let svgs: Vec<PathBuf> = plots.svgs().cloned().collect();
     grainbench_comparisons::report::html::write(
         out,
         &format!("grainbench compare {}", cmp.scene),
@@ -368,199 +376,4 @@ fn run_rust(
             Ok(None)
         }
     }
-}
-
-/// The comparisons of the last `compare` run in `dir`: one (`compare.json`) or one per seed
-/// (`compare-seeds.json` and `seed-K/compare.json`), whichever was written last.
-fn compare_runs(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Vec<(u64, Comparison)>> {
-    let (name, seed) = (scene.name.as_str(), scene.seed);
-    let single = dir.join("compare.json");
-    let over = dir.join("compare-seeds.json");
-    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
-    let use_seeds = match (modified(&single), modified(&over)) {
-        (Some(a), Some(b)) => b > a,
-        (None, Some(_)) => true,
-        _ => false,
-    };
-    let read = |path: &Path| -> Result<Comparison> {
-        let text = std::fs::read_to_string(path).with_context(|| {
-            format!(
-                "reading {}: run `grainbench compare {name}` first (golden update records its results)",
-                path.display()
-            )
-        })?;
-        let cmp: Comparison =
-            serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-        if cmp.scene != name {
-            bail!("{} holds scene {}, not {name}", path.display(), cmp.scene);
-        }
-        Ok(cmp)
-    };
-    if !use_seeds {
-        return Ok(vec![(seed, read(&single)?)]);
-    }
-    let text =
-        std::fs::read_to_string(&over).with_context(|| format!("reading {}", over.display()))?;
-    let summary: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", over.display()))?;
-    let seeds: Vec<u64> = summary["seeds"]
-        .as_array()
-        .map(|a| a.iter().filter_map(|s| s.as_u64()).collect())
-        .unwrap_or_default();
-    if seeds.is_empty() {
-        bail!("{} lists no seed", over.display());
-    }
-    seeds
-        .into_iter()
-        .map(|s| {
-            Ok((
-                s,
-                read(&dir.join(format!("seed-{s}")).join("compare.json"))?,
-            ))
-        })
-        .collect()
-}
-
-/// Was `path` written by `reproduce --record` (several seeds and a paper table)?
-fn recorded_by_reproduce(path: &Path) -> bool {
-    std::fs::read_to_string(path)
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .is_some_and(|d| d.get("table").is_some())
-}
-
-/// `grainbench golden update SCENE`: records the results of the last `compare` run of the
-/// scene (from `runs/compare/<scene>/` or `--from`) as `golden/<scene>/<code>.json`.
-pub fn golden_update(
-    scene: &str,
-    codes: &[String],
-    from: Option<PathBuf>,
-    command: Option<String>,
-) -> Result<i32> {
-    let scene = load_scene(scene)?;
-    let dir = from.unwrap_or_else(|| Path::new("runs/compare").join(&scene.name));
-    // Before the results: a code run through an adapter is read back by its registered name.
-    let wanted = if codes.is_empty() {
-        Vec::new()
-    } else {
-        xcode::parse_codes(codes, true)?
-    };
-    let runs = compare_runs(&dir, &scene)?;
-    let cmp = &runs[0].1;
-    let mut written = 0;
-    for c in &cmp.codes {
-        if !wanted.is_empty() && !wanted.contains(&c.code) {
-            continue;
-        }
-        if c.outcome != Outcome::Ran {
-            eprintln!("{}: not recorded ({})", c.code, c.outcome);
-            continue;
-        }
-        let out = Path::new("golden")
-            .join(&scene.name)
-            .join(format!("{}.json", c.code));
-        if recorded_by_reproduce(&out) {
-            eprintln!(
-                "{}: not recorded: {} holds a `grainbench reproduce --record` result over seeds; rerun that command to change it",
-                c.code,
-                out.display()
-            );
-            continue;
-        }
-        // Every seed the code finished, in the order they ran.
-        let seeds: Vec<serde_json::Value> = runs
-            .iter()
-            .filter_map(|(seed, cmp)| {
-                let r = cmp
-                    .codes
-                    .iter()
-                    .find(|r| r.code == c.code && r.outcome == Outcome::Ran)?;
-                Some(serde_json::json!({
-                    "seed": seed,
-                    "status": r.status,
-                    "wall_seconds": r.wall_seconds,
-                    "metrics": r.metrics,
-                }))
-            })
-            .collect();
-        let seed_list = if runs.len() > 1 {
-            format!(
-                " --seeds {}",
-                seed_list(&runs.iter().map(|(s, _)| *s).collect::<Vec<_>>())
-            )
-        } else {
-            String::new()
-        };
-        let doc = serde_json::json!({
-            "code": c.version.as_deref().map(clean_version),
-            "scene": scene.name,
-            "n": cmp.n,
-            "command": command.clone().unwrap_or_else(|| format!("grainbench compare {} --codes {}{seed_list}", scene.name, c.code)),
-            "deviations": c.deviations,
-            "seeds": seeds,
-        });
-        write_atomic(
-            &out,
-            (serde_json::to_string_pretty(&doc)? + "\n").as_bytes(),
-        )?;
-        println!("wrote {}", out.display());
-        written += 1;
-    }
-    if written == 0 {
-        bail!(
-            "nothing recorded: no code in {} ran to its end",
-            dir.display()
-        );
-    }
-    if written > 1 {
-        // The overlaid plots of a run that recorded several codes at once.
-        for plot in ["pf.svg", "gr.svg"] {
-            if let Ok(bytes) = std::fs::read(dir.join(plot)) {
-                let to = Path::new("golden").join(&scene.name).join(plot);
-                write_atomic(&to, &bytes)?;
-                println!("wrote {}", to.display());
-            }
-        }
-    }
-    Ok(0)
-}
-
-/// `grainbench golden show SCENE`: the recorded values of every code, as the compare table.
-pub fn golden_show(scene: &str, all_metrics: bool) -> Result<i32> {
-    let scene = load_scene(scene)?;
-    let start = Start::of(&scene).ok();
-    let mut codes = Vec::new();
-    for c in Code::ALL {
-        if let Some(r) = crosscode::recorded(Path::new("."), &scene.name, c) {
-            codes.push(r);
-            continue;
-        }
-        // Not recorded: say why when the code cannot express the scene.
-        if let (Some(st), true) = (&start, c != Code::Rust) {
-            if let Err(refusal) = decks::deck(st, c) {
-                codes.push(CodeResult {
-                    message: Some(refusal.to_string()),
-                    ..CodeResult::new(c, Outcome::Refused)
-                });
-            }
-        }
-    }
-    if codes.iter().all(|c| c.outcome != Outcome::Recorded) {
-        bail!(
-            "no golden/{}/<code>.json recorded; run `grainbench compare {0}` and `grainbench golden update {0}`",
-            scene.name
-        );
-    }
-    let cmp = crosscode::build(
-        &scene.name,
-        scene.particles.count,
-        Some(scene.paper_state.as_deref().unwrap_or(&scene.name)),
-        codes,
-        &Bands::embedded(),
-    );
-    print!("{}", cmp.to_markdown(all_metrics));
-    for c in cmp.codes.iter().filter(|c| c.outcome == Outcome::Recorded) {
-        println!("{}: `{}`", c.code, c.message.as_deref().unwrap_or(""));
-    }
-    Ok(0)
 }

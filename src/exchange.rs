@@ -6,6 +6,7 @@
 //! `reference-inputs/adapters/grainbench.toml` it proves the format end to end
 //! (`tests/adapter.rs`).
 
+use crate::common::on_threads;
 use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::xcode::decks::generic::{
@@ -16,10 +17,29 @@ use grainbench_comparisons::xcode::decks::num;
 use grainbench_engine::plan::rate_time_unit;
 use grainbench_engine::scene::{Initial, Output, Particles, Scene, Step};
 use grainbench_engine::snapshot::{write_atomic, Snapshot};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// The arguments of `grainbench run-exchange`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Directory holding exchange.json and particles.csv (`grainbench decks SCENE --codes generic`).
+    pub input: PathBuf,
+    /// Where the final state goes.
+    pub output: PathBuf,
+    /// Threads.
+    #[arg(long, short = 'j')]
+    pub threads: Option<usize>,
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// `grainbench run-exchange`.
+pub fn command(a: Args) -> Result<i32> {
+    on_threads(a.threads, || run_exchange(&a.input, &a.output, a.quiet))
+}
 
 /// Runs the exchange in `input`, writing the final state into `output`.
-pub fn run_exchange(input: &Path, output: &Path, quiet: bool) -> Result<i32> {
+fn run_exchange(input: &Path, output: &Path, quiet: bool) -> Result<i32> {
     let ex = Exchange::read(&input.join(EXCHANGE)).map_err(anyhow::Error::msg)?;
     let particles = input.join(&ex.particles.file);
     let scene = scene_of(&ex, &particles)?;

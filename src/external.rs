@@ -1,7 +1,7 @@
 //! External codes (LAMMPS, LIGGGHTS, YADE) and our own engine as child processes: the binary
 //! and deck of a code, its command line, the supervised run (time limit, Ctrl-C, peak
-//! memory, progress line), the outcome and the final state read back, and what their logs
-//! say (version, steps, loop time, the failure line). Used by `compare`, `bench` and
+//! memory, progress line), the outcome and the final state read back (what their logs say is
+//! read by `grainbench_comparisons::xcode::import::logs`). Used by `compare`, `bench` and
 //! `accuracy`.
 
 use crate::common::STOP;
@@ -10,7 +10,7 @@ use anyhow::{bail, Context, Result};
 use grainbench_comparisons::outcome::Outcome;
 use grainbench_comparisons::xcode::crosscode::CodeResult;
 use grainbench_comparisons::xcode::decks::{self, generic, Code, Start};
-use grainbench_comparisons::xcode::import::{self, Meta};
+use grainbench_comparisons::xcode::import::{self, logs, Meta};
 use grainbench_engine::snapshot::Snapshot;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -242,7 +242,7 @@ pub fn supervise(
             term_at = None;
         }
         if let Some(log) = progress {
-            let line = last_line(&dir.join(log));
+            let line = logs::last_line(&dir.join(log));
             bar.set_message(line.clone());
             bar.tick();
             if plain && last_plain.elapsed().as_secs_f64() >= 10.0 {
@@ -336,9 +336,9 @@ pub fn finish(
             r.outcome = Outcome::Failed;
             r.message = Some(format!(
                 "exited with {s}; last output: {:?}; {logs}",
-                last_line(&dir.join("stderr.log"))
+                logs::last_line(&dir.join("stderr.log"))
                     .chars()
-                    .chain(last_line(&dir.join("stdout.log")).chars())
+                    .chain(logs::last_line(&dir.join("stdout.log")).chars())
                     .collect::<String>()
             ));
             return Ok(None);
@@ -366,71 +366,21 @@ pub fn why_failed(status: Option<std::process::ExitStatus>, dir: &Path, time_lim
         None => format!("killed after the time limit of {time_limit} s"),
         Some(s) => format!(
             "exited with {s}: {:?}",
-            failure_line(&dir.join("stderr.log"))
+            logs::failure_line(&dir.join("stderr.log"))
         ),
     }
 }
 
-/// The line of a log saying why a process failed: a Rust panic's message or an `error:`
-/// line, else the last line.
-pub fn failure_line(path: &Path) -> String {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    let lines: Vec<&str> = text.lines().collect();
-    if let Some(k) = lines.iter().position(|l| l.contains("panicked at")) {
-        return lines[k..(k + 2).min(lines.len())].join(" ");
-    }
-    if let Some(l) = lines.iter().rev().find(|l| l.starts_with("error")) {
-        return l.to_string();
-    }
-    last_line(path)
-}
-
-/// The last non-empty line of a log (for the progress line and error messages).
-pub fn last_line(path: &Path) -> String {
-    let Ok(bytes) = std::fs::read(path) else {
-        return String::new();
-    };
-    let tail = &bytes[bytes.len().saturating_sub(4096)..];
-    let text = String::from_utf8_lossy(tail);
-    // Prefer a progress line (a thermo row starting with the step, or YADE's `stage …`) over
-    // the run summaries LAMMPS and LIGGGHTS print between chunks.
-    let progress = |l: &&&str| {
-        let first = l.split_whitespace().next().unwrap_or("");
-        first.parse::<u64>().is_ok() || first == "stage"
-    };
-    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
-    lines
-        .iter()
-        .rev()
-        .find(progress)
-        .or(lines.last())
-        .copied()
-        .unwrap_or("")
-        .trim()
-        .chars()
-        .take(120)
-        .collect()
-}
-
-/// The code's own version line from its output.
+/// The code's own version: what its run's output says ([`logs::version_line`]), else for an
+/// adapter what its `version` command prints, else its program.
 pub fn version_line(code: Code, stdout: &Path) -> Option<String> {
-    if let Code::Adapter(a) = code {
-        let dir = stdout.parent()?.join(generic::OUTPUT_DIR);
-        return import::generic::status_value(&dir, "version")
+    let read = logs::version_line(code, stdout);
+    match code {
+        Code::Adapter(a) => read
             .or_else(|| adapter_version(a))
-            .or_else(|| Some(a.run[0].clone()));
+            .or_else(|| Some(a.run[0].clone())),
+        _ => read,
     }
-    let text = std::fs::read_to_string(stdout).ok()?;
-    let key = match code {
-        Code::Lammps | Code::Lammps2025 => "LAMMPS (",
-        Code::Liggghts => "LIGGGHTS (",
-        Code::Yade => "Yade ",
-        Code::Rust | Code::Generic | Code::Adapter(_) => return None,
-    };
-    text.lines()
-        .find(|l| l.contains(key))
-        .map(clean_version)
-        .or_else(|| Some(code.binary().to_string()))
 }
 
 /// The first line an adapter's `version` command prints.
@@ -447,79 +397,4 @@ fn adapter_version(a: &grainbench_comparisons::xcode::adapter::Adapter) -> Optio
         .map(str::trim)
         .find(|l| !l.is_empty())
         .map(String::from)
-}
-
-/// `Welcome to Yade 2023.02a` → `Yade 2023.02a`.
-pub fn clean_version(line: &str) -> String {
-    line.trim().trim_start_matches("Welcome to ").to_string()
-}
-
-/// Steps of a LAMMPS/LIGGGHTS run: the sum of its `Loop time of … for S steps` lines.
-pub fn log_steps(dir: &Path) -> Option<u64> {
-    let text = std::fs::read_to_string(dir.join("stdout.log")).ok()?;
-    let steps: Vec<u64> = text
-        .lines()
-        .filter(|l| l.starts_with("Loop time of "))
-        .filter_map(|l| {
-            l.split(" for ")
-                .nth(1)?
-                .split_whitespace()
-                .next()?
-                .parse()
-                .ok()
-        })
-        .collect();
-    (!steps.is_empty()).then(|| steps.iter().sum())
-}
-
-/// Time-stepping loop time from a code's log: the sum of LAMMPS/LIGGGHTS `Loop time of X on
-/// P procs for S steps` lines, or YADE's `done: … after S steps, T s`.
-pub fn loop_time(code: Code, dir: &Path) -> Option<f64> {
-    let text = std::fs::read_to_string(dir.join("stdout.log")).ok()?;
-    match code {
-        Code::Lammps | Code::Lammps2025 | Code::Liggghts => {
-            let times: Vec<f64> = text
-                .lines()
-                .filter_map(|l| l.strip_prefix("Loop time of "))
-                .filter_map(|l| l.split_whitespace().next()?.parse().ok())
-                .collect();
-            (!times.is_empty()).then(|| times.iter().sum())
-        }
-        Code::Yade => text
-            .lines()
-            .rev()
-            .find_map(|l| l.strip_prefix("done: "))
-            .and_then(|l| l.rsplit(", ").next())
-            .and_then(|t| t.trim().trim_end_matches('s').trim().parse().ok())
-            // Printed to 0.1 s: shorter loops are unknown.
-            .filter(|&t: &f64| t >= 0.1),
-        Code::Adapter(_) => {
-            import::generic::status_value(&dir.join(generic::OUTPUT_DIR), "loop_time")?
-                .parse()
-                .ok()
-        }
-        Code::Rust | Code::Generic => None,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn loop_times_from_logs() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::write(
-            dir.path().join("stdout.log"),
-            "Loop time of 1.5 on 1 procs for 200 steps with 256 atoms\n\nLoop time of 0.25 on 1 procs for 0 steps with 256 atoms\n",
-        )
-        .unwrap();
-        assert_eq!(loop_time(Code::Lammps, dir.path()), Some(1.75));
-        std::fs::write(
-            dir.path().join("stdout.log"),
-            "stage 0 …\ndone: time-limit after 400 steps, 3.2 s\n",
-        )
-        .unwrap();
-        assert_eq!(loop_time(Code::Yade, dir.path()), Some(3.2));
-    }
 }

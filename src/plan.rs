@@ -6,8 +6,23 @@ use anyhow::Result;
 use grainbench_engine::plan::{HardStage, Plan, PlanStage, PlanStep, StageKind};
 use grainbench_engine::scene::{Mu, Relax, RelaxMethod};
 
+/// The arguments of `grainbench plan`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scene file or embedded scene name.
+    pub scene: String,
+    /// The plan as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
 /// `grainbench plan`.
-pub fn plan_command(spec: &str, json: bool) -> Result<i32> {
+pub fn command(a: Args) -> Result<i32> {
+    plan_command(&a.scene, a.json)
+}
+
+/// `grainbench plan`.
+fn plan_command(spec: &str, json: bool) -> Result<i32> {
     let scene = load_scene(spec)?;
     let plan = grainbench_engine::run::plan_of(&scene)
         .map_err(|e| anyhow::anyhow!("scene {}: {e}", scene.name))?;

@@ -2,26 +2,68 @@
 //! (checkpointed, resumable), measures every metric with the same code as `analyze`, and
 //! writes the table against the published values (golden/paper-values.toml) and the plots.
 
-use crate::common::{analysis_with_moduli, seed_list};
-use crate::consolidation;
-use crate::run::{run, stage_file, RunFlags, CHECKPOINT, STAGES};
+use crate::common::{analysis_with_moduli, on_threads, seed_list};
+use crate::run::{run, RunFlags};
 use anyhow::{bail, Context, Result};
-use grainbench_comparisons::metrics::fractal_fit::FractalFit;
 use grainbench_comparisons::metrics::{analyze, density, Analysis, MODULI_METRICS};
 use grainbench_comparisons::report::reproduction::{self, SeedStats};
-use grainbench_comparisons::report::{paper, plots};
+use grainbench_comparisons::report::{consolidation, figures, paper};
+use grainbench_engine::run::layout::{stage_file, CHECKPOINT, STAGES, SUMMARY};
 use grainbench_engine::{library, snapshot, Snapshot};
 use std::path::{Path, PathBuf};
 
+/// The arguments of `grainbench reproduce`.
+#[derive(clap::Args, Debug)]
 pub struct Args {
+    /// ar07, grc07 or grc08.
     pub paper: String,
+    /// State: A, Aprime, B, C, D, Z, D-QS (AR07); type1-phi036-mu05, type2-phi036-rr, …
+    /// (GRC07); cycle-rr (GRC08). `grainbench scenes` lists them as <paper>-<state>.
+    #[arg(long)]
     pub state: String,
+    /// Seeds, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1")]
     pub seeds: Vec<u64>,
+    /// The reduced CI variant of the scene (`<paper>-<state>-ci`).
+    #[arg(long)]
     pub ci: bool,
+    /// Output directory (default: `runs/reproduce/<scene>`).
+    #[arg(long, short)]
     pub out: Option<PathBuf>,
+    /// Also write golden/<scene>/rust.json (command, seeds, wall times, metrics).
+    #[arg(long)]
     pub record: bool,
+    /// Cap the time limit of every stage (reduced time units): bounds the cost of a run
+    /// whose criteria are slow to meet; such stages end at `time-limit` and say so.
+    #[arg(long, value_name = "T")]
     pub max_time: Option<f64>,
-    pub flags: RunFlags,
+    #[arg(long, short = 'j')]
+    pub threads: Option<usize>,
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Seconds of wall time between checkpoints.
+    #[arg(long, default_value_t = 60.0, value_name = "SECS")]
+    pub checkpoint_every: f64,
+}
+
+impl Args {
+    fn flags(&self) -> RunFlags {
+        RunFlags {
+            quiet: self.quiet,
+            report: true,
+            resume: false,
+            force: false,
+            checkpoint_every: self.checkpoint_every,
+            dump_every: None,
+            trace_every: None,
+            stage_snapshots: false,
+        }
+    }
+}
+
+/// `grainbench reproduce`.
+pub fn command(a: Args) -> Result<i32> {
+    on_threads(a.threads, || reproduce(&a))
 }
 
 /// One finished seed.
@@ -58,7 +100,7 @@ fn states_of(paper: &str) -> Vec<String> {
         .collect()
 }
 
-pub fn reproduce(a: &Args) -> Result<i32> {
+fn reproduce(a: &Args) -> Result<i32> {
     let paper = a.paper.to_lowercase();
     if !["ar07", "grc07", "grc08"].contains(&paper.as_str()) {
         bail!("unknown paper {:?}: expected ar07, grc07 or grc08", a.paper);
@@ -126,7 +168,7 @@ pub fn reproduce(a: &Args) -> Result<i32> {
             resume: dir.join(CHECKPOINT).exists(),
             // The levels of a pressure program (GRC08 §II.D.2) are the points of its curve.
             stage_snapshots: consolidation::has_program(&scene),
-            ..a.flags.clone()
+            ..a.flags()
         };
         let (code, outcome) = run(&scene, &dir, &flags)?;
         if code != 0 {
@@ -231,7 +273,11 @@ pub fn reproduce(a: &Args) -> Result<i32> {
         snapshot::write_atomic(&file, t.to_json().as_bytes())?;
     }
     let labels: Vec<String> = runs.iter().map(|r| format!("seed {}", r.seed)).collect();
-    let mut plotted = write_plots(&out, &labels, &analyses, true, mean_ik.as_ref());
+    let figures = figures::packings(&out, &labels, &analyses, true, mean_ik.as_ref());
+    for w in &figures.warnings {
+        eprintln!("warning: {w}");
+    }
+    let mut plotted = figures.files;
     if !curves.is_empty() {
         plotted.push(consolidation::write_csv(&out, &curves)?);
         let paper = consolidation::paper_curve(&state_key);
@@ -343,7 +389,7 @@ fn seed_dir(out: &Path, seed: u64) -> PathBuf {
 
 /// A seed that finished earlier with the same settings.
 fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedRun>> {
-    let summary = dir.join("summary.json");
+    let summary = dir.join(SUMMARY);
     if dir.join(CHECKPOINT).exists() || !summary.exists() {
         return Ok(None);
     }
@@ -369,72 +415,6 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
             .as_u64()
             .map(|c| c as usize),
     }))
-}
-
-/// P(f) and g(r) of every analysis (one curve per label: seeds, codes), overlaid; the DTS fit
-/// for cohesionless frictionless sphere packings (AR07 Fig. 4); I(k) with its GRC07 (28) fit
-/// for 2D cohesive packings. Returns the files written.
-/// With `seeds` (the analyses are seeds of one state), P(f) is their mean over the band of
-/// their spread; with `mean_ik` (their mean I(k), [`density::mean_scattering`]) the I(k) plot
-/// shows it over its standard-error band with its fit, in place of each seed's fit.
-pub(crate) fn write_plots(
-    out: &Path,
-    labels: &[String],
-    analyses: &[Analysis],
-    seeds: bool,
-    mean_ik: Option<&density::MeanScattering>,
-) -> Vec<PathBuf> {
-    let mut written = Vec::new();
-    let pf: Vec<Vec<(f64, f64)>> = analyses.iter().map(pf_points).collect();
-    let gr: Vec<Vec<(f64, f64)>> = analyses
-        .iter()
-        .map(|a| points(a.structure.pair_correlation.as_ref().map(|g| (&g.x, &g.y))))
-        .collect();
-    fn series<'a>(pts: &'a [Vec<(f64, f64)>], labels: &'a [String]) -> Vec<plots::Series<'a>> {
-        pts.iter()
-            .zip(labels)
-            .filter(|(p, _)| !p.is_empty())
-            .map(|(p, l)| plots::Series::new(l, p))
-            .collect()
-    }
-    let banded = seeds.then(|| plots::seed_band(&pf)).flatten();
-    let band_label = format!("mean of {} seeds (band: their spread)", pf.len());
-    let pf_series = match &banded {
-        Some(b) => vec![plots::Series::new(&band_label, &b.mean).with_band(&b.band)],
-        None => series(&pf, labels),
-    };
-    written.extend(pf_plot(out, &pf_series, analyses.first()));
-    match plots::pair_correlation(&out.join("gr"), &series(&gr, labels), Some(8.0)) {
-        Ok(f) => written.extend([f.svg, f.png]),
-        Err(e) => eprintln!("warning: no g(r) plot: {e}"),
-    }
-    // GRC07 Fig. 23: I(k) of each seed and its fit by GRC07 (28), 2D cohesive packings; over
-    // seeds, their mean and its fit.
-    let mut ik: Vec<plots::OwnedCurve> = Vec::new();
-    let fit_curve =
-        |who: &str, f: &FractalFit| (format!("{who}: {}", f.legend()), f.curve(60), None);
-    for (a, l) in analyses.iter().zip(labels) {
-        let Some(d) = &a.density else { continue };
-        ik.push((l.clone(), d.scattering.points(), None));
-        if let (None, Some(f)) = (mean_ik, &d.fit) {
-            ik.push(fit_curve(l, f));
-        }
-    }
-    if let Some(m) = mean_ik {
-        let s = &m.scattering;
-        let label = format!("mean of {} seeds ± s.e.", m.samples);
-        ik.push((label, s.points(), Some(s.error_band())));
-        if let Some(f) = &m.fit {
-            ik.push(fit_curve("mean", f));
-        }
-    }
-    if !ik.is_empty() {
-        match plots::scattering(&out.join("ik"), "Scattering function I(k)", &ik) {
-            Ok(f) => written.extend([f.svg, f.png]),
-            Err(e) => eprintln!("warning: no I(k) plot: {e}"),
-        }
-    }
-    written
 }
 
 /// The reproduction tables of a run: the state's, and GRC08 T.IV's step where it applies.
@@ -523,35 +503,6 @@ fn record(
     }
     snapshot::write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     Ok(path)
-}
-
-/// P(f) of an analysis as points (empty without one).
-pub(crate) fn pf_points(a: &Analysis) -> Vec<(f64, f64)> {
-    points(a.forces.pdf.as_ref().map(|h| (&h.x, &h.y)))
-}
-
-/// `pf.svg` and `.png` of `series`, styled for the packings `like` is one of: the DTS fit for
-/// cohesionless frictionless spheres only, P(f) of N itself for cohesive ones.
-pub(crate) fn pf_plot(
-    out: &Path,
-    series: &[plots::Series],
-    like: Option<&Analysis>,
-) -> Vec<PathBuf> {
-    let cohesive = like.is_some_and(|a| a.cohesive);
-    let frictionless_spheres =
-        like.is_some_and(|a| a.dimension == 3 && a.mu == Some(0.0) && !a.cohesive);
-    match plots::force_distribution(&out.join("pf"), series, frictionless_spheres, cohesive) {
-        Ok(f) => vec![f.svg, f.png],
-        Err(e) => {
-            eprintln!("warning: no P(f) plot: {e}");
-            Vec::new()
-        }
-    }
-}
-
-fn points(xy: Option<(&Vec<f64>, &Vec<f64>)>) -> Vec<(f64, f64)> {
-    xy.map(|(x, y)| x.iter().copied().zip(y.iter().copied()).collect())
-        .unwrap_or_default()
 }
 
 #[cfg(test)]

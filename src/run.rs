@@ -1,10 +1,11 @@
 //! `grainbench run`: one scene into an output directory (snapshot, summary, checkpoints),
 //! with a progress bar and the metrics table of the final state.
 
-use crate::common::{analysis_of, install_stop_handler, load_scene, STOP};
+use crate::common::{analysis_of, install_stop_handler, load_scene, on_threads, STOP};
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::report::vtk;
 use grainbench_engine::checkpoint::Checkpoint;
+use grainbench_engine::run::layout::{stage_file, CHECKPOINT, LAST_GOOD, LOCK, STAGES, SUMMARY};
 use grainbench_engine::run::{
     CheckpointSpec, Checks, DumpSpec, Outcome, Progress, RunError, RunOptions, StageEndHook,
     StepEnd, StepReport,
@@ -13,6 +14,89 @@ use grainbench_engine::scene::MAX_TRACE_GRAINS;
 use grainbench_engine::{snapshot, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
+
+/// The arguments of `grainbench run`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scene file or embedded scene name.
+    pub scene: Option<String>,
+    /// Output directory (default: `runs/<scene name>`).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long, short = 'j')]
+    pub threads: Option<usize>,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Exit with status 3 unless every protocol step ends at equilibrium.
+    #[arg(long)]
+    pub require_equilibrium: bool,
+    /// Continue the interrupted run whose checkpoint is in the output directory; the
+    /// result is bit-identical to an uninterrupted run.
+    #[arg(long)]
+    pub resume: bool,
+    /// Start over even if the output directory holds the checkpoint of an unfinished run
+    /// (which is then deleted); without it such a run is refused.
+    #[arg(long, conflicts_with = "resume")]
+    pub force: bool,
+    /// Seconds of wall time between checkpoints (`<out>/checkpoint.bin`); 0 = at every
+    /// check. The checkpoint is removed when the run completes.
+    #[arg(long, default_value_t = 60.0, value_name = "SECS")]
+    pub checkpoint_every: f64,
+    /// Seed of the initial state instead of the scene's.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Write a ParaView frame (grains and contacts, `.vtu`) every T of simulated time (the
+    /// first check at or after each multiple of T) into `<out>/vtk/`, listed in
+    /// `<out>/vtk/run.pvd`; a resumed run extends the series.
+    #[arg(long, value_name = "T")]
+    pub dump_every: Option<f64>,
+    /// Few-body runs (≤ 1000 grains): record every grain and contact at the first check
+    /// at or after each multiple of T into `<out>/trace-grains.csv` and
+    /// `trace-contacts.csv`; with two grains also their impact (`impact.json`: duration,
+    /// peak force, restitution, angles, spins, with Hertz's values). Set the scene's
+    /// `numerics.check_every = 1` for a frame every step.
+    #[arg(long, value_name = "T")]
+    pub trace_every: Option<f64>,
+    /// Write the state at the end of each stage into `<out>/stages/stage-KKK.snap.json`
+    /// (K as in the progress line, from 0): the points of a pressure program.
+    #[arg(long)]
+    pub stage_snapshots: bool,
+}
+
+/// `grainbench run`.
+pub fn command(a: Args) -> Result<i32> {
+    on_threads(a.threads, || {
+        for (flag, t) in [
+            ("--trace-every", a.trace_every),
+            ("--dump-every", a.dump_every),
+        ] {
+            if let Some(t) = t {
+                if !(t.is_finite() && t > 0.0) {
+                    bail!("{flag} {t}: give a positive time in the scene's reduced units");
+                }
+            }
+        }
+        let flags = RunFlags {
+            quiet: a.quiet,
+            report: true,
+            resume: a.resume,
+            force: a.force,
+            checkpoint_every: a.checkpoint_every,
+            dump_every: a.dump_every,
+            trace_every: a.trace_every,
+            stage_snapshots: a.stage_snapshots,
+        };
+        run_command(
+            a.scene.as_deref(),
+            a.out,
+            a.seed,
+            a.require_equilibrium,
+            &flags,
+        )
+    })
+}
 
 /// Above this many steps to the time limits, a scene with warnings is told so once the time
 /// step is known.
@@ -36,23 +120,9 @@ pub struct RunFlags {
     pub stage_snapshots: bool,
 }
 
-/// The folder of the stage-end snapshots, in a run's output directory.
-pub const STAGES: &str = "stages";
-
-/// The snapshot of the state at the end of stage `index` (0-based, as in `Scene::stages`).
-pub fn stage_file(index: usize) -> String {
-    format!("stage-{index:03}.snap.json")
-}
-
-/// The checkpoint file of a run, in its output directory.
-pub const CHECKPOINT: &str = "checkpoint.bin";
-
-/// The lock file of a run, in its output directory (one of the scene's reserved names).
-pub const LOCK: &str = ".grainbench.lock";
-
 /// `grainbench run`: exit status 3 with `require_equilibrium` unless every step ended at
 /// equilibrium.
-pub fn run_command(
+fn run_command(
     spec: Option<&str>,
     out: Option<PathBuf>,
     seed: Option<u64>,
@@ -336,7 +406,7 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
             let RunError::Unstable { last_good, .. } = &e else {
                 unreachable!()
             };
-            let path = out.join("last-good.snap.json");
+            let path = out.join(LAST_GOOD);
             last_good.write(&path)?;
             eprintln!("error: {e}");
             eprintln!(
@@ -383,7 +453,7 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
         "snapshot": snap_path,
     });
     snapshot::write_atomic(
-        &out.join("summary.json"),
+        &out.join(SUMMARY),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     println!("scene      {} — {}", scene.name, scene.description);

@@ -8,6 +8,43 @@ use grainbench_comparisons::xcode::Code;
 use grainbench_engine::snapshot::write_atomic;
 use std::path::{Path, PathBuf};
 
+/// The arguments of `grainbench decks`.
+#[derive(clap::Args, Debug)]
+pub struct DecksArgs {
+    /// Scene files or embedded scene names.
+    pub scenes: Vec<String>,
+    /// Every embedded scene.
+    #[arg(long)]
+    pub all: bool,
+    /// Codes, comma-separated: lammps (Debian's 2021), lammps-2025, liggghts, yade, and
+    /// `generic`, the neutral exchange format (docs/exchange-format.md) (default: all five).
+    #[arg(long, value_delimiter = ',')]
+    pub codes: Vec<String>,
+    /// Output directory instead of `reference-inputs/<scene>/` (one scene only).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+}
+
+/// The arguments of `grainbench capabilities`.
+#[derive(clap::Args, Debug)]
+pub struct CapabilitiesArgs {
+    pub scene: Option<String>,
+    /// Columns, comma-separated (default: lammps, lammps-2025, liggghts, yade); NAME=PATH.toml
+    /// adds a code with an adapter file.
+    #[arg(long, value_delimiter = ',')]
+    pub codes: Vec<String>,
+}
+
+/// `grainbench decks`.
+pub fn decks(a: DecksArgs) -> Result<i32> {
+    decks_command(&a.scenes, a.all, &a.codes, a.out)
+}
+
+/// `grainbench capabilities`.
+pub fn capabilities(a: CapabilitiesArgs) -> Result<i32> {
+    capabilities_command(a.scene.as_deref(), &a.codes)
+}
+
 /// Written instead of a deck when a code cannot express the scene.
 pub const REFUSED: &str = "refused.txt";
 
@@ -133,7 +170,7 @@ fn remove_stale_deck(dir: &Path, code: Code) -> Result<()> {
 }
 
 /// `grainbench decks`.
-pub fn decks_command(
+fn decks_command(
     scenes: &[String],
     all: bool,
     codes: &[String],
@@ -169,7 +206,7 @@ pub fn decks_command(
 }
 
 /// `grainbench capabilities`.
-pub fn capabilities_command(scene: Option<&str>, codes: &[String]) -> Result<i32> {
+fn capabilities_command(scene: Option<&str>, codes: &[String]) -> Result<i32> {
     let codes = if codes.is_empty() {
         Code::EXTERNAL.to_vec()
     } else {

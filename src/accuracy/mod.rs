@@ -29,7 +29,7 @@
 //! (fix press/berendsen), no equilibrium criteria of ours (it runs the deck's fixed number of
 //! steps) and its κ is our κ converted to a modulus, fixed by the deck: only `dt` is swept there.
 
-use crate::common::{install_stop_handler, load_scene, STOP};
+use crate::common::{install_stop_handler, load_scene, on_threads, STOP};
 use crate::external;
 use anyhow::{bail, Context, Result};
 use grainbench_comparisons::outcome::Outcome;
@@ -99,7 +99,12 @@ pub struct Args {
     pub quiet: bool,
 }
 
-pub fn accuracy(a: &Args) -> Result<i32> {
+/// `grainbench accuracy`.
+pub fn command(a: Args) -> Result<i32> {
+    on_threads(a.threads, || accuracy(&a))
+}
+
+fn accuracy(a: &Args) -> Result<i32> {
     let base = load_scene(&a.scene)?;
     if a.seeds.is_empty() {
         bail!("--seeds needs at least one seed (e.g. --seeds 1,2,3)");

@@ -16,6 +16,7 @@ use crate::common::{install_stop_handler, STOP};
 use crate::external;
 use anyhow::{bail, Context, Result};
 use grainbench_engine::geometry::{Dim, D3};
+use grainbench_engine::run::layout::SUMMARY;
 use grainbench_engine::snapshot::{self, write_atomic, Snapshot};
 use serde::Serialize;
 use std::path::Path;
@@ -125,7 +126,7 @@ pub fn sweep(
             .args(["--threads", &threads.to_string(), "--checkpoint-every", "0"]);
         let done = external::supervise(&mut cmd, &dir, "memory", time_limit, quiet, None)?;
         let summary: Option<serde_json::Value> =
-            std::fs::read_to_string(dir.join("run").join("summary.json"))
+            std::fs::read_to_string(dir.join("run").join(SUMMARY))
                 .ok()
                 .and_then(|t| serde_json::from_str(&t).ok());
         match (done.status, summary) {

@@ -11,6 +11,8 @@ use anyhow::{bail, Context, Result};
 use grainbench_comparisons::outcome::Outcome;
 use grainbench_comparisons::xcode::crosscode::CodeResult;
 use grainbench_comparisons::xcode::decks::{lammps_bench, Code, Deck, Start};
+use grainbench_comparisons::xcode::import::logs;
+use grainbench_engine::run::layout::SUMMARY;
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;
 use report::{notes, rows_of, run_line, to_csv, to_markdown, Report, Run};
@@ -77,7 +79,11 @@ pub struct Args {
 }
 
 /// `grainbench bench`.
-pub fn bench(a: &Args) -> Result<i32> {
+pub fn command(a: Args) -> Result<i32> {
+    bench(&a)
+}
+
+fn bench(a: &Args) -> Result<i32> {
     if a.threads.is_empty() || a.threads.contains(&0) {
         bail!("--threads: give thread counts ≥ 1, e.g. --threads 1,2");
     }
@@ -411,14 +417,14 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
             run.outcome = Outcome::Failed;
             run.message = Some(format!(
                 "exited with {s}: {:?}; logs in {}",
-                external::failure_line(&dir.join("stderr.log")),
+                logs::failure_line(&dir.join("stderr.log")),
                 dir.display()
             ));
             return Ok(());
         }
         Some(_) => {}
     }
-    let path = dir.join("summary.json");
+    let path = dir.join(SUMMARY);
     let summary: serde_json::Value = serde_json::from_slice(
         &std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?,
     )
@@ -477,8 +483,8 @@ fn run_external(
         run.status = Some(grainbench_comparisons::xcode::import::read_status(
             &dir.join("final.status"),
         ));
-        run.steps = external::log_steps(dir);
-        run.loop_seconds = external::loop_time(code, dir);
+        run.steps = logs::log_steps(dir);
+        run.loop_seconds = logs::loop_time(code, dir);
         if run.steps.is_none() {
             run.outcome = Outcome::Failed;
             run.message = Some(format!(
@@ -499,7 +505,7 @@ fn run_external(
     if let Some(snap) = snap {
         run.status = Some(snap.status.clone());
         run.steps = Some(snap.step);
-        run.loop_seconds = external::loop_time(code, dir);
+        run.loop_seconds = logs::loop_time(code, dir);
     } else {
         run.wall_seconds = None;
     }

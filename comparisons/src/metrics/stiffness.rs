@@ -514,6 +514,29 @@ fn largest_eigenvalue(n: usize, entries: &[(usize, usize, f64)]) -> f64 {
 }
 
 impl ContactStiffness {
+    /// The stiffnesses of `scene`'s law for `snap`: the κ of the scene's last stage, the
+    /// snapshot's μ.
+    ///
+    /// # Errors
+    /// A scene of another dimension than the snapshot's, or a law [`Self::of_law`] refuses.
+    pub fn of_scene(
+        scene: &grainbench_engine::Scene,
+        snap: &grainbench_engine::Snapshot,
+    ) -> Result<Self, String> {
+        if scene.dimension != snap.dimension {
+            return Err(format!(
+                "a {}D scene for a {}D snapshot",
+                scene.dimension, snap.dimension
+            ));
+        }
+        let kappa = scene
+            .protocol
+            .last()
+            .and_then(|s| s.kappa())
+            .unwrap_or_else(|| scene.law.kappa());
+        Self::of_law(&scene.law, kappa, snap.mu)
+    }
+
     /// The stiffnesses of a scene's law at stiffness `kappa` (a stage's override, or
     /// `law.kappa`) and friction `mu` (the snapshot's; `None` is μ = ∞), in reduced units:
     /// linear law K_N = κ, K_T = κ·kt_over_kn, K_r = kr·κ, F0/D0 = 1/D0 (GRC07 §II.C);

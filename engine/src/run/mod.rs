@@ -6,12 +6,14 @@
 //! [`crate::plan`] resolves it, [`checks`] measures equilibrium and detects
 //! blow-ups, [`relax`] and [`quench`] are the optional final phases of a stage (GRC07 damping,
 //! AR07's velocity quench), [`output`] writes snapshots, [`report`] holds what a run reports,
-//! [`options`] how it is driven, [`checkpoint`] the resumable state on disk.
+//! [`options`] how it is driven, [`checkpoint`] the resumable state on disk, [`layout`] the
+//! names of the files a run writes.
 
 pub mod checkpoint;
 pub(crate) mod checks;
 pub(crate) mod fire;
 pub(crate) mod grains;
+pub mod layout;
 pub(crate) mod options;
 pub(crate) mod output;
 pub(crate) mod particles_file;

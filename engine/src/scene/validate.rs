@@ -3,19 +3,12 @@
 
 use super::error::SceneError;
 use super::{Arrangement, ForceScale, Law, Mu, RelaxMethod, Scene, Step};
+use crate::run::layout;
 use std::path::Path;
 
 /// Largest `numerics.check_every`: a stop request is honoured within this many steps
 /// (with 1e10 the run would not stop on SIGTERM; docs/reliability.md).
 pub const MAX_CHECK_EVERY: u64 = 10_000;
-
-/// Files a run writes beside its snapshot in the output directory.
-pub const RESERVED_OUTPUT_NAMES: [&str; 4] = [
-    "summary.json",
-    "checkpoint.bin",
-    "last-good.snap.json",
-    ".grainbench.lock",
-];
 
 /// Thinnest initial gas accepted (tests/fuzz.rs: 1e-300 overflowed the cell grids).
 pub const MIN_INITIAL_PACKING_FRACTION: f64 = 1e-3;
@@ -642,12 +635,12 @@ impl Scene {
             }
         }
         let name = self.output.snapshot.as_str();
-        if matches!(name, "." | "..") || RESERVED_OUTPUT_NAMES.contains(&name) {
+        if matches!(name, "." | "..") || layout::RESERVED.contains(&name) {
             return Err(ck.err(
                 "output.snapshot",
                 format!(
                     "{name:?} is a name the run itself uses in the output directory ({}): the files would overwrite each other; choose another name, e.g. \"final.snap.json\"",
-                    RESERVED_OUTPUT_NAMES.join(", ")
+                    layout::RESERVED.join(", ")
                 ),
             ));
         }

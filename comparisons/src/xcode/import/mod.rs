@@ -7,6 +7,7 @@
 //! * [`liggghts`]: `dump custom` of the atoms + `dump local` of `compute pair/gran/local`.
 //! * [`yade`]: the text export our YADE scripts write (bodies, interactions, cell).
 //! * [`generic`]: the exchange format's output (`particles.csv`, `contacts.csv`, `status.txt`).
+//! * [`logs`]: what the codes' logs say (version, steps, loop time, why a run failed).
 //!
 //! Each reader returns [`Raw`] grains and contacts; [`assemble`] builds the snapshot (branch
 //! vectors and gaps from the positions, contact stress from the forces, AR07 (8)).
@@ -15,6 +16,7 @@ pub mod by_code;
 pub mod generic;
 pub mod lammps;
 pub mod liggghts;
+pub mod logs;
 pub mod trace;
 pub mod yade;
 
