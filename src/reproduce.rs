@@ -9,6 +9,7 @@ use grainbench_comparisons::metrics::{analyze, density, Analysis, MODULI_METRICS
 use grainbench_comparisons::report::reproduction::{self, SeedStats};
 use grainbench_comparisons::report::{consolidation, figures, paper};
 use grainbench_engine::run::layout::{stage_file, CHECKPOINT, STAGES, SUMMARY};
+use grainbench_engine::run::StepEnd;
 use grainbench_engine::{library, snapshot, Snapshot};
 use std::path::{Path, PathBuf};
 
@@ -71,7 +72,7 @@ struct SeedRun {
     seed: u64,
     snapshot: Snapshot,
     wall_seconds: f64,
-    status: String,
+    status: StepEnd,
     steps: serde_json::Value,
     /// Worker threads of the run (results do not depend on it; wall time does).
     threads: usize,
@@ -101,94 +102,15 @@ fn states_of(paper: &str) -> Vec<String> {
 }
 
 fn reproduce(a: &Args) -> Result<i32> {
-    let paper = a.paper.to_lowercase();
-    if !["ar07", "grc07", "grc08"].contains(&paper.as_str()) {
-        bail!("unknown paper {:?}: expected ar07, grc07 or grc08", a.paper);
-    }
-    let state_key = format!("{paper}-{}", a.state);
-    let scene_name = if a.ci {
-        format!("{state_key}-ci")
-    } else {
-        state_key.clone()
-    };
-    if library::scene_text(&scene_name).is_none() {
-        bail!(
-            "no scene {scene_name:?} for {paper} state {:?}; states with scenes: {}{}",
-            a.state,
-            states_of(&paper).join(", "),
-            if a.ci {
-                " (CI variants exist for some: drop --ci for the paper-size scene)"
-            } else {
-                ""
-            }
-        );
-    }
-    if a.seeds.is_empty() {
-        bail!("--seeds needs at least one seed");
-    }
-    let mut base = library::scene(&scene_name).expect("checked above")?;
-    if let Some(t) = a.max_time {
-        if !(t.is_finite() && t > 0.0) {
-            bail!("--max-time must be a positive number of reduced time units, got {t}");
-        }
-        base.cap_max_time(t);
-    }
-    // A scene may reproduce another published row (the CI variant of D runs at 10 kPa).
-    let state_key = base.paper_state.clone().unwrap_or(state_key);
-    if paper::paper_values(&state_key).is_none() {
-        bail!(
-            "scene {scene_name} has no published values to compare with (no state {state_key:?} in golden/paper-values.toml); run it with `grainbench run {scene_name}`. {paper} states with scenes and values: {}",
-            match states_of(&paper).join(", ") {
-                s if s.is_empty() => "none yet".to_string(),
-                s => s,
-            }
-        );
-    }
+    let (scene_name, base, state_key) = scene_of(a)?;
     let out = a
         .out
         .clone()
         .unwrap_or_else(|| Path::new("runs/reproduce").join(&scene_name));
-    let mut runs = Vec::new();
-    for (k, &seed) in a.seeds.iter().enumerate() {
-        let mut scene = base.clone();
-        scene.seed = seed;
-        let dir = seed_dir(&out, seed);
-        eprintln!(
-            "reproduce {scene_name}: seed {seed} ({} of {}) → {}",
-            k + 1,
-            a.seeds.len(),
-            dir.display()
-        );
-        if let Some(done) = finished(&dir, &scene)? {
-            eprintln!("  finished earlier: reusing {}", dir.display());
-            runs.push(done);
-            continue;
-        }
-        let flags = RunFlags {
-            resume: dir.join(CHECKPOINT).exists(),
-            // The levels of a pressure program (GRC08 §II.D.2) are the points of its curve.
-            stage_snapshots: consolidation::has_program(&scene),
-            ..a.flags()
-        };
-        let (code, outcome) = run(&scene, &dir, &flags)?;
-        if code != 0 {
-            if code == 130 {
-                eprintln!("interrupted: run the same command again to continue where it stopped");
-            }
-            return Ok(code);
-        }
-        let o = outcome.expect("a run that exits 0 has an outcome");
-        runs.push(SeedRun {
-            seed,
-            status: o.snapshot.status.clone(),
-            wall_seconds: o.wall_seconds,
-            steps: serde_json::to_value(&o.steps)?,
-            threads: rayon::current_num_threads(),
-            contacts_at_threshold: Some(o.contacts_at_threshold.all),
-            below_tolerance: Some(o.contacts_at_threshold.below_tolerance),
-            snapshot: o.snapshot,
-        });
-    }
+    let runs = match run_seeds(a, &base, &scene_name, &out)? {
+        Ok(runs) => runs,
+        Err(code) => return Ok(code),
+    };
     // The elastic moduli and rigidity counts (seconds a seed) only where the paper publishes
     // one of them (AR07 Z's H/N_f).
     let with_moduli = paper::paper_values(&state_key).is_some_and(|p| {
@@ -281,26 +203,11 @@ fn reproduce(a: &Args) -> Result<i32> {
     if !curves.is_empty() {
         plotted.push(consolidation::write_csv(&out, &curves)?);
         let paper = consolidation::paper_curve(&state_key);
-        match consolidation::plot(&out, &curves, mean.as_ref(), paper) {
-            Ok(files) => plotted.extend(files),
-            Err(e) => eprintln!("warning: no consolidation plot: {e}"),
+        let more = consolidation::figures::all(&out, &curves, mean.as_ref(), paper, &cycle_ik);
+        for w in &more.warnings {
+            eprintln!("warning: {w}");
         }
-        match consolidation::plot_coordination(&out, &curves) {
-            Ok(files) => plotted.extend(files),
-            Err(e) => eprintln!("warning: no coordination plot: {e}"),
-        }
-        match consolidation::plot_moduli(&out, &curves) {
-            Ok(files) => plotted.extend(files),
-            Err(e) => eprintln!("warning: no moduli plot: {e}"),
-        }
-        match consolidation::plot_scattering(&out, &curves, &cycle_ik) {
-            Ok(files) => plotted.extend(files),
-            Err(e) => eprintln!("warning: no I(k) plot of the cycle: {e}"),
-        }
-        match consolidation::plot_blob_size(&out, &curves) {
-            Ok(files) => plotted.extend(files),
-            Err(e) => eprintln!("warning: no blob-size plot: {e}"),
-        }
+        plotted.extend(more.files);
     }
     let svgs: Vec<PathBuf> = plotted
         .iter()
@@ -315,7 +222,7 @@ fn reproduce(a: &Args) -> Result<i32> {
     )?;
     let not_equilibrated: Vec<u64> = runs
         .iter()
-        .filter(|r| r.status != "equilibrium")
+        .filter(|r| r.status != StepEnd::Equilibrium)
         .map(|r| r.seed)
         .collect();
     println!();
@@ -338,28 +245,134 @@ fn reproduce(a: &Args) -> Result<i32> {
         };
         let path = record(a, &scene_name, &base, &state_key, &runs, &values, tables)?;
         println!("recorded   {}", path.display());
-        // The table and the vector plots go beside the record, for reading on the web.
-        for f in [
-            "report.md",
-            "pf.svg",
-            "gr.svg",
-            "ik.svg",
-            "consolidation.svg",
-            "consolidation-z.svg",
-            "consolidation-moduli.svg",
-            "consolidation-ik.svg",
-            "consolidation-xi.svg",
-            "consolidation.csv",
-        ] {
-            let (from, to) = (out.join(f), path.with_file_name(f));
-            if from.exists() {
-                let bytes = std::fs::read(&from)?;
-                snapshot::write_atomic(&to, &bytes)?;
-                println!("recorded   {}", to.display());
-            }
-        }
+        record_files(&out, &path)?;
     }
     Ok(0)
+}
+
+/// The scene `reproduce` runs (the paper size or its CI variant, `--max-time` applied), its
+/// name, and the published state it is compared with.
+fn scene_of(a: &Args) -> Result<(String, grainbench_engine::Scene, String)> {
+    let paper = a.paper.to_lowercase();
+    if !["ar07", "grc07", "grc08"].contains(&paper.as_str()) {
+        bail!("unknown paper {:?}: expected ar07, grc07 or grc08", a.paper);
+    }
+    let state_key = format!("{paper}-{}", a.state);
+    let scene_name = if a.ci {
+        format!("{state_key}-ci")
+    } else {
+        state_key.clone()
+    };
+    if library::scene_text(&scene_name).is_none() {
+        bail!(
+            "no scene {scene_name:?} for {paper} state {:?}; states with scenes: {}{}",
+            a.state,
+            states_of(&paper).join(", "),
+            if a.ci {
+                " (CI variants exist for some: drop --ci for the paper-size scene)"
+            } else {
+                ""
+            }
+        );
+    }
+    if a.seeds.is_empty() {
+        bail!("--seeds needs at least one seed");
+    }
+    let mut base = library::scene(&scene_name).expect("checked above")?;
+    if let Some(t) = a.max_time {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--max-time must be a positive number of reduced time units, got {t}");
+        }
+        base.cap_max_time(t);
+    }
+    // A scene may reproduce another published row (the CI variant of D runs at 10 kPa).
+    let state_key = base.paper_state.clone().unwrap_or(state_key);
+    if paper::paper_values(&state_key).is_none() {
+        bail!(
+            "scene {scene_name} has no published values to compare with (no state {state_key:?} in golden/paper-values.toml); run it with `grainbench run {scene_name}`. {paper} states with scenes and values: {}",
+            match states_of(&paper).join(", ") {
+                s if s.is_empty() => "none yet".to_string(),
+                s => s,
+            }
+        );
+    }
+    Ok((scene_name, base, state_key))
+}
+
+/// Runs each seed into `out/seed-K/`, reusing a seed that finished earlier with the same
+/// settings and resuming one that was interrupted; `Err(status)` when a run did not finish.
+fn run_seeds(
+    a: &Args,
+    base: &grainbench_engine::Scene,
+    scene_name: &str,
+    out: &Path,
+) -> Result<std::result::Result<Vec<SeedRun>, i32>> {
+    let mut runs = Vec::new();
+    for (k, &seed) in a.seeds.iter().enumerate() {
+        let mut scene = base.clone();
+        scene.seed = seed;
+        let dir = seed_dir(out, seed);
+        eprintln!(
+            "reproduce {scene_name}: seed {seed} ({} of {}) → {}",
+            k + 1,
+            a.seeds.len(),
+            dir.display()
+        );
+        if let Some(done) = finished(&dir, &scene)? {
+            eprintln!("  finished earlier: reusing {}", dir.display());
+            runs.push(done);
+            continue;
+        }
+        let flags = RunFlags {
+            resume: dir.join(CHECKPOINT).exists(),
+            // The levels of a pressure program (GRC08 §II.D.2) are the points of its curve.
+            stage_snapshots: consolidation::has_program(&scene),
+            ..a.flags()
+        };
+        let (code, outcome) = run(&scene, &dir, &flags)?;
+        if code != 0 {
+            if code == 130 {
+                eprintln!("interrupted: run the same command again to continue where it stopped");
+            }
+            return Ok(Err(code));
+        }
+        let o = outcome.expect("a run that exits 0 has an outcome");
+        runs.push(SeedRun {
+            seed,
+            status: o.status,
+            wall_seconds: o.wall_seconds,
+            steps: serde_json::to_value(&o.steps)?,
+            threads: rayon::current_num_threads(),
+            contacts_at_threshold: Some(o.contacts_at_threshold.all),
+            below_tolerance: Some(o.contacts_at_threshold.below_tolerance),
+            snapshot: o.snapshot,
+        });
+    }
+    Ok(Ok(runs))
+}
+
+/// The table and the vector plots go beside the record (`path`), for reading on the web.
+fn record_files(out: &Path, path: &Path) -> Result<()> {
+    for f in [
+        "report.md",
+        "pf.svg",
+        "gr.svg",
+        "ik.svg",
+        "consolidation.svg",
+        "consolidation-z.svg",
+        "consolidation-moduli.svg",
+        "consolidation-ik.svg",
+        "consolidation-xi.svg",
+        "consolidation.csv",
+    ] {
+        let (from, to) = (out.join(f), path.with_file_name(f));
+        if from.exists() {
+            let bytes = std::fs::read(&from)?;
+            snapshot::write_atomic(&to, &bytes)?;
+            println!("recorded   {}", to.display());
+        }
+    }
+    Ok(())
 }
 
 /// How each seed ended, with its contacts at a Coulomb or rolling threshold (GRC07 §II.D: none
@@ -376,7 +389,7 @@ fn seed_summary(runs: &[SeedRun]) -> String {
                 (Some(n), None) => format!(", {n} contact(s) at a threshold"),
                 (None, _) => String::new(),
             };
-            format!("{} ({}{at})", r.seed, r.status)
+            format!("{} ({}{at})", r.seed, r.status.as_str())
         })
         .collect();
     format!("\nSeeds: {}.\n", seeds.join("; "))
@@ -398,8 +411,15 @@ fn finished(dir: &Path, scene: &grainbench_engine::Scene) -> Result<Option<SeedR
     // Compared as scenes, so fields added later with defaults do not count as changes.
     let same = serde_json::from_value::<grainbench_engine::Scene>(s["settings"].clone())
         .is_ok_and(|saved| saved.same_run(scene));
-    let status = s["status"].as_str().unwrap_or("").to_string();
-    if !same || status == "interrupted" {
+    let text = s["status"].as_str().unwrap_or("");
+    let Some(status) = StepEnd::parse(text) else {
+        bail!(
+            "{}: status {text:?} is not one a run writes (equilibrium, time-limit, interrupted, …): delete {} to run the seed again",
+            summary.display(),
+            dir.display()
+        );
+    };
+    if !same || status == StepEnd::Interrupted {
         return Ok(None);
     }
     let snap = Snapshot::read(&dir.join(&scene.output.snapshot))?;
@@ -485,7 +505,7 @@ fn record(
         "settings": scene,
         "seeds": runs.iter().zip(values).map(|(r, v)| serde_json::json!({
             "seed": r.seed,
-            "status": r.status,
+            "status": r.status.as_str(),
             "wall_seconds": r.wall_seconds,
             "threads": r.threads,
             "contacts_at_threshold": r.contacts_at_threshold,
@@ -518,7 +538,7 @@ mod tests {
             seed,
             snapshot: snap.clone(),
             wall_seconds: 0.0,
-            status: "equilibrium".into(),
+            status: StepEnd::Equilibrium,
             steps: serde_json::Value::Null,
             threads: 1,
             contacts_at_threshold: Some(0),

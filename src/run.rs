@@ -176,47 +176,7 @@ fn scene_and_out(
 pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<Outcome>)> {
     let quiet = flags.quiet;
     let cp_path = out.join(CHECKPOINT);
-    if !(flags.checkpoint_every.is_finite() && flags.checkpoint_every >= 0.0) {
-        bail!("--checkpoint-every must be a number of seconds ≥ 0");
-    }
-    if out.exists() && !out.is_dir() {
-        bail!(
-            "--out {}: is a file, not a directory; give a directory (it is created if missing)",
-            out.display()
-        );
-    }
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("creating the output directory {}", out.display()))?;
-    // Held until the run returns; also proves the directory writable before any work.
-    let _lock = lock_output(out)?;
-    if !flags.resume && !flags.force && cp_path.exists() {
-        bail!(
-            "{} holds the checkpoint of an unfinished run ({}): continue it with --resume, or start over with --force (which deletes it)",
-            out.display(),
-            cp_path.display()
-        );
-    }
-    if flags.force && !flags.resume && cp_path.exists() {
-        // Gone now, so that a crash before this run's first checkpoint cannot resume it.
-        std::fs::remove_file(&cp_path)
-            .with_context(|| format!("deleting the old checkpoint {}", cp_path.display()))?;
-    }
-    let resume = if flags.resume {
-        let cp = Checkpoint::read(&cp_path).map_err(|e| {
-            anyhow::anyhow!("{e}\n(--resume continues a run from {}; there is nothing to resume without it: run without --resume)", cp_path.display())
-        })?;
-        let saved = cp.scene().map_err(anyhow::Error::msg)?;
-        if !saved.same_run(scene) {
-            bail!(
-                "the checkpoint {} belongs to scene {:?} with other settings than the scene given; resume with the same scene, or omit the scene and give only --out",
-                cp_path.display(),
-                saved.name
-            );
-        }
-        Some(cp)
-    } else {
-        None
-    };
+    let (_lock, resume) = prepare(scene, out, flags)?;
     install_stop_handler();
     let stop = &STOP;
     let threads = rayon::current_num_threads();
@@ -233,76 +193,8 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    // The stages' time limits in steps, said once the time step is known.
-    let time_limits: f64 = scene.stages().iter().map(|(_, s)| s.max_time()).sum();
-    let mut told_steps = warnings.is_empty();
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(1000);
-        b.set_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix} {bar:30} {msg}")
-                .expect("valid template"),
-        );
-        b
-    };
-    // Without a terminal (CI logs), a plain line every few seconds instead of the bar.
-    let plain = !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let mut last_line = std::time::Instant::now();
-    let mut on_progress = |p: &Progress| {
-        let c = &p.checks;
-        if !told_steps && p.dt > 0.0 {
-            told_steps = true;
-            let steps = time_limits / p.dt;
-            if steps.is_finite() && steps > LONG_RUN_STEPS {
-                bar.suspend(|| {
-                    eprintln!(
-                        "note: dt = {:.3e}: the stages' time limits ({time_limits:.3e}) allow up to {steps:.2e} steps",
-                        p.dt
-                    )
-                });
-            }
-        }
-        if let Some(w) = unwrapped_warning(p) {
-            bar.suspend(|| eprintln!("warning: {w}"));
-        }
-        if plain && last_line.elapsed().as_secs_f64() >= 5.0 {
-            last_line = std::time::Instant::now();
-            eprintln!(
-                "  stage {}/{} {} t={:.4e}/{:.1e} Φ={:.4} {} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}{}{}",
-                p.step_index + 1,
-                p.step_count,
-                p.step_kind,
-                p.time,
-                p.max_time,
-                c.packing_fraction,
-                pressure_text(c),
-                c.kinetic_per_grain,
-                c.force_ratio,
-                c.stress_ratio,
-                c.kinetic_ratio,
-                c.interactions,
-                clusters_text(c),
-                if p.relaxing { " relaxing" } else { "" }
-            );
-        }
-        bar.set_prefix(format!(
-            "stage {}/{} {}",
-            p.step_index + 1,
-            p.step_count,
-            p.step_kind
-        ));
-        bar.set_position(((p.time / p.max_time).min(1.0) * 1000.0) as u64);
-        bar.set_message(format!(
-            "t={:.4e} Φ={:.4} {} Ek/grain={:.2e} F/crit={:.2e} contacts={}",
-            p.time,
-            c.packing_fraction,
-            pressure_text(c),
-            c.kinetic_per_grain,
-            c.force_ratio,
-            c.interactions
-        ));
-    };
+    let bar = progress_bar(quiet);
+    let mut on_progress = progress_lines(scene, &bar, quiet, warnings.is_empty());
     if let Some(cp) = &resume {
         eprintln!(
             "resuming from {} (stage {} of {})",
@@ -353,26 +245,7 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
             }
         }
     };
-    // Stage-end states: each written atomically as its stage ends, so a resumed run keeps
-    // those of the stages before it.
-    let stage_dir = out.join(STAGES);
-    let mut stage_failed = false;
-    let mut on_stage_end = |r: &StepReport, snap: &snapshot::Snapshot| {
-        if stage_failed {
-            return;
-        }
-        let path = stage_dir.join(stage_file(r.index));
-        let written = std::fs::create_dir_all(&stage_dir)
-            .map_err(anyhow::Error::from)
-            .and_then(|_| snap.write(&path).map_err(anyhow::Error::from));
-        if let Err(e) = written {
-            stage_failed = true;
-            eprintln!(
-                "warning: --stage-snapshots: writing {} failed ({e}); no more stage states are written",
-                path.display()
-            );
-        }
-    };
+    let mut on_stage_end = stage_writer(out);
     let result = grainbench_engine::run_scene(
         scene,
         &mut RunOptions {
@@ -433,6 +306,185 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
             out.display()
         );
     }
+    write_summary(scene, &outcome, out, &snap_path)?;
+    print_outcome(scene, &outcome, flags.report);
+    println!("snapshot   {}", snap_path.display());
+    println!("wall time  {:.1} s", outcome.wall_seconds);
+    if outcome.status == StepEnd::Interrupted {
+        eprintln!(
+            "interrupted: the state at the stop is in {}; continue with `grainbench run --resume --out {}`",
+            snap_path.display(),
+            out.display()
+        );
+        return Ok((130, Some(outcome)));
+    }
+    Ok((0, Some(outcome)))
+}
+
+/// Readies the output directory of a run: checks the flags against what it holds, takes its
+/// lock (held while the returned file lives) and reads the checkpoint to resume, if asked.
+fn prepare(
+    scene: &Scene,
+    out: &Path,
+    flags: &RunFlags,
+) -> Result<(std::fs::File, Option<Checkpoint>)> {
+    let cp_path = out.join(CHECKPOINT);
+    if !(flags.checkpoint_every.is_finite() && flags.checkpoint_every >= 0.0) {
+        bail!("--checkpoint-every must be a number of seconds ≥ 0");
+    }
+    if out.exists() && !out.is_dir() {
+        bail!(
+            "--out {}: is a file, not a directory; give a directory (it is created if missing)",
+            out.display()
+        );
+    }
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("creating the output directory {}", out.display()))?;
+    // Held until the run returns; also proves the directory writable before any work.
+    let lock = lock_output(out)?;
+    if !flags.resume && !flags.force && cp_path.exists() {
+        bail!(
+            "{} holds the checkpoint of an unfinished run ({}): continue it with --resume, or start over with --force (which deletes it)",
+            out.display(),
+            cp_path.display()
+        );
+    }
+    if flags.force && !flags.resume && cp_path.exists() {
+        // Gone now, so that a crash before this run's first checkpoint cannot resume it.
+        std::fs::remove_file(&cp_path)
+            .with_context(|| format!("deleting the old checkpoint {}", cp_path.display()))?;
+    }
+    let resume = if flags.resume {
+        let cp = Checkpoint::read(&cp_path).map_err(|e| {
+            anyhow::anyhow!("{e}\n(--resume continues a run from {}; there is nothing to resume without it: run without --resume)", cp_path.display())
+        })?;
+        let saved = cp.scene().map_err(anyhow::Error::msg)?;
+        if !saved.same_run(scene) {
+            bail!(
+                "the checkpoint {} belongs to scene {:?} with other settings than the scene given; resume with the same scene, or omit the scene and give only --out",
+                cp_path.display(),
+                saved.name
+            );
+        }
+        Some(cp)
+    } else {
+        None
+    };
+    Ok((lock, resume))
+}
+
+/// The progress bar of a run (hidden with `quiet`).
+fn progress_bar(quiet: bool) -> ProgressBar {
+    if quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(1000);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix} {bar:30} {msg}")
+                .expect("valid template"),
+        );
+        b
+    }
+}
+
+/// What a run shows as it goes: the bar's stage, position and numbers; without a terminal (CI
+/// logs) a plain line every few seconds; once the time step is known, a note when the stages'
+/// time limits allow a very long run (unless the scene already warned); warnings of the
+/// checks.
+fn progress_lines<'a>(
+    scene: &Scene,
+    bar: &'a ProgressBar,
+    quiet: bool,
+    warned_nothing: bool,
+) -> impl FnMut(&Progress) + 'a {
+    // The stages' time limits in steps, said once the time step is known.
+    let time_limits: f64 = scene.stages().iter().map(|(_, s)| s.max_time()).sum();
+    let mut told_steps = warned_nothing;
+    // Without a terminal (CI logs), a plain line every few seconds instead of the bar.
+    let plain = !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mut last_line = std::time::Instant::now();
+    move |p: &Progress| {
+        let c = &p.checks;
+        if !told_steps && p.dt > 0.0 {
+            told_steps = true;
+            let steps = time_limits / p.dt;
+            if steps.is_finite() && steps > LONG_RUN_STEPS {
+                bar.suspend(|| {
+                    eprintln!(
+                        "note: dt = {:.3e}: the stages' time limits ({time_limits:.3e}) allow up to {steps:.2e} steps",
+                        p.dt
+                    )
+                });
+            }
+        }
+        if let Some(w) = unwrapped_warning(p) {
+            bar.suspend(|| eprintln!("warning: {w}"));
+        }
+        if plain && last_line.elapsed().as_secs_f64() >= 5.0 {
+            last_line = std::time::Instant::now();
+            eprintln!(
+                "  stage {}/{} {} t={:.4e}/{:.1e} Φ={:.4} {} Ek/grain={:.2e} force/crit={:.2e} stress/crit={:.2e} Ek/crit={:.2e} contacts={}{}{}",
+                p.step_index + 1,
+                p.step_count,
+                p.step_kind,
+                p.time,
+                p.max_time,
+                c.packing_fraction,
+                pressure_text(c),
+                c.kinetic_per_grain,
+                c.force_ratio,
+                c.stress_ratio,
+                c.kinetic_ratio,
+                c.interactions,
+                clusters_text(c),
+                if p.relaxing { " relaxing" } else { "" }
+            );
+        }
+        bar.set_prefix(format!(
+            "stage {}/{} {}",
+            p.step_index + 1,
+            p.step_count,
+            p.step_kind
+        ));
+        bar.set_position(((p.time / p.max_time).min(1.0) * 1000.0) as u64);
+        bar.set_message(format!(
+            "t={:.4e} Φ={:.4} {} Ek/grain={:.2e} F/crit={:.2e} contacts={}",
+            p.time,
+            c.packing_fraction,
+            pressure_text(c),
+            c.kinetic_per_grain,
+            c.force_ratio,
+            c.interactions
+        ));
+    }
+}
+
+/// `--stage-snapshots`: writes each stage's end state into `<out>/stages/`, atomically as the
+/// stage ends, so that a resumed run keeps those of the stages before it; after a failed
+/// write, a warning and no more.
+fn stage_writer(out: &Path) -> impl FnMut(&StepReport, &snapshot::Snapshot) {
+    let stage_dir = out.join(STAGES);
+    let mut stage_failed = false;
+    move |r: &StepReport, snap: &snapshot::Snapshot| {
+        if stage_failed {
+            return;
+        }
+        let path = stage_dir.join(stage_file(r.index));
+        let written = std::fs::create_dir_all(&stage_dir)
+            .map_err(anyhow::Error::from)
+            .and_then(|_| snap.write(&path).map_err(anyhow::Error::from));
+        if let Err(e) = written {
+            stage_failed = true;
+            eprintln!(
+                "warning: --stage-snapshots: writing {} failed ({e}); no more stage states are written",
+                path.display()
+            );
+        }
+    }
+}
+
+/// `summary.json`: the scene, the law and time step, the stage reports and how the run ended.
+fn write_summary(scene: &Scene, outcome: &Outcome, out: &Path, snap_path: &Path) -> Result<()> {
     let summary = serde_json::json!({
         "scene": scene.name,
         "seed": scene.seed,
@@ -448,7 +500,7 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
         "neighbor_builds": outcome.neighbor_builds,
         "contacts_at_threshold": outcome.contacts_at_threshold.all,
         "contacts_at_threshold_below_tolerance": outcome.contacts_at_threshold.below_tolerance,
-        "status": outcome.snapshot.status,
+        "status": outcome.status.as_str(),
         "steps": outcome.steps,
         "snapshot": snap_path,
     });
@@ -456,6 +508,12 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
         &out.join(SUMMARY),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
+    Ok(())
+}
+
+/// The terminal report of a finished run: the law, the time step, each stage's end with its
+/// relaxation and quench, the contacts at a threshold, and (with `report`) the metrics table.
+fn print_outcome(scene: &Scene, outcome: &Outcome, report: bool) {
     println!("scene      {} — {}", scene.name, scene.description);
     println!("law        {}", outcome.law);
     println!(
@@ -547,23 +605,12 @@ pub fn run(scene: &Scene, out: &Path, flags: &RunFlags) -> Result<(i32, Option<O
             at.below_tolerance
         );
     }
-    if flags.report {
+    if report {
         print!(
             "{}",
             grainbench_comparisons::report::to_markdown(&analysis_of(&outcome.snapshot))
         );
     }
-    println!("snapshot   {}", snap_path.display());
-    println!("wall time  {:.1} s", outcome.wall_seconds);
-    if outcome.snapshot.status == "interrupted" {
-        eprintln!(
-            "interrupted: the state at the stop is in {}; continue with `grainbench run --resume --out {}`",
-            snap_path.display(),
-            out.display()
-        );
-        return Ok((130, Some(outcome)));
-    }
-    Ok((0, Some(outcome)))
 }
 
 /// The cluster count of aggregation stages (empty elsewhere).

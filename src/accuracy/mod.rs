@@ -116,95 +116,8 @@ fn accuracy(a: &Args) -> Result<i32> {
         }
         base.cap_max_time(t);
     }
-    let knobs: Vec<Knob> = if a.knobs.is_empty() {
-        Knob::ALL.to_vec()
-    } else {
-        let mut k = a
-            .knobs
-            .iter()
-            .map(|s| Knob::parse(s))
-            .collect::<Result<Vec<_>>>()?;
-        k.sort();
-        k.dedup();
-        k
-    };
-    let codes: Vec<Code> = if a.codes.is_empty() {
-        vec![Code::Rust]
-    } else {
-        a.codes
-            .iter()
-            .map(|c| match Code::parse(c.trim()) {
-                Some(code @ (Code::Rust | Code::Lammps)) => Ok(code),
-                Some(other) => bail!(
-                    "--codes: {} exposes none of the swept knobs in its generated deck; accuracy supports rust and lammps (dt only)",
-                    other.name()
-                ),
-                None => bail!("--codes: unknown code {c:?}; expected rust or lammps"),
-            })
-            .collect::<Result<Vec<_>>>()?
-    };
+    let points = points(a, &base)?;
     let b = Settings::of(&base);
-    let mut values: BTreeMap<Knob, Vec<f64>> = BTreeMap::new();
-    for &k in &knobs {
-        if k == Knob::Inertia && b.inertia.is_none() {
-            eprintln!(
-                "accuracy: scene {} has no stress-controlled stage: the inertia knob is skipped",
-                base.name
-            );
-            continue;
-        }
-        let given = match k {
-            Knob::Dt => &a.dt,
-            Knob::Inertia => &a.inertia,
-            Knob::Tolerance => &a.tolerance,
-            Knob::Kappa => &a.kappa,
-        };
-        let v = if given.is_empty() {
-            k.default_values(&base, &b)
-        } else {
-            normalize(given.clone())
-        };
-        if let Some(bad) = v.iter().find(|x| **x <= 0.0) {
-            bail!("--{}: values must be > 0, got {bad}", k.name());
-        }
-        values.insert(k, v);
-    }
-    // The reference: the tightest value of every swept knob, the scene's value elsewhere.
-    let mut reference = b;
-    for (&k, v) in &values {
-        let tight = v
-            .iter()
-            .copied()
-            .fold(b.get(k), |t, x| if k.tighter(x, t) { x } else { t });
-        reference = reference.with(k, tight);
-    }
-    let mut points = Vec::new();
-    for &code in &codes {
-        let ref_settings = if code == Code::Rust {
-            reference
-        } else {
-            b.with(Knob::Dt, values.get(&Knob::Dt).map_or(b.dt, |v| v[0]))
-        };
-        points.push(Point {
-            code,
-            knob: None,
-            settings: ref_settings,
-            is_default: false,
-        });
-        for (&k, v) in &values {
-            if code == Code::Lammps && k != Knob::Dt {
-                continue;
-            }
-            for &x in v {
-                points.push(Point {
-                    code,
-                    knob: Some(k),
-                    settings: b.with(k, x),
-                    is_default: (x - b.get(k)).abs() <= 1e-12 * x.abs(),
-                });
-            }
-        }
-    }
     let out = a
         .out
         .clone()
@@ -265,6 +178,101 @@ fn accuracy(a: &Args) -> Result<i32> {
     let table = build_table(&base, &points, &records, &a.seeds);
     write_outputs(&out, &base, &a.seeds, &table, a.max_time, a.quiet)?;
     Ok(0)
+}
+
+/// The points of the sweep: for each code its reference (the tightest value of every swept
+/// knob, the scene's value elsewhere) and each knob's values, the others at the scene's.
+fn points(a: &Args, base: &Scene) -> Result<Vec<Point>> {
+    let knobs: Vec<Knob> = if a.knobs.is_empty() {
+        Knob::ALL.to_vec()
+    } else {
+        let mut k = a
+            .knobs
+            .iter()
+            .map(|s| Knob::parse(s))
+            .collect::<Result<Vec<_>>>()?;
+        k.sort();
+        k.dedup();
+        k
+    };
+    let codes: Vec<Code> = if a.codes.is_empty() {
+        vec![Code::Rust]
+    } else {
+        a.codes
+            .iter()
+            .map(|c| match Code::parse(c.trim()) {
+                Some(code @ (Code::Rust | Code::Lammps)) => Ok(code),
+                Some(other) => bail!(
+                    "--codes: {} exposes none of the swept knobs in its generated deck; accuracy supports rust and lammps (dt only)",
+                    other.name()
+                ),
+                None => bail!("--codes: unknown code {c:?}; expected rust or lammps"),
+            })
+            .collect::<Result<Vec<_>>>()?
+    };
+    let b = Settings::of(base);
+    let mut values: BTreeMap<Knob, Vec<f64>> = BTreeMap::new();
+    for &k in &knobs {
+        if k == Knob::Inertia && b.inertia.is_none() {
+            eprintln!(
+                "accuracy: scene {} has no stress-controlled stage: the inertia knob is skipped",
+                base.name
+            );
+            continue;
+        }
+        let given = match k {
+            Knob::Dt => &a.dt,
+            Knob::Inertia => &a.inertia,
+            Knob::Tolerance => &a.tolerance,
+            Knob::Kappa => &a.kappa,
+        };
+        let v = if given.is_empty() {
+            k.default_values(base, &b)
+        } else {
+            normalize(given.clone())
+        };
+        if let Some(bad) = v.iter().find(|x| **x <= 0.0) {
+            bail!("--{}: values must be > 0, got {bad}", k.name());
+        }
+        values.insert(k, v);
+    }
+    // The reference: the tightest value of every swept knob, the scene's value elsewhere.
+    let mut reference = b;
+    for (&k, v) in &values {
+        let tight = v
+            .iter()
+            .copied()
+            .fold(b.get(k), |t, x| if k.tighter(x, t) { x } else { t });
+        reference = reference.with(k, tight);
+    }
+    let mut points = Vec::new();
+    for &code in &codes {
+        let ref_settings = if code == Code::Rust {
+            reference
+        } else {
+            b.with(Knob::Dt, values.get(&Knob::Dt).map_or(b.dt, |v| v[0]))
+        };
+        points.push(Point {
+            code,
+            knob: None,
+            settings: ref_settings,
+            is_default: false,
+        });
+        for (&k, v) in &values {
+            if code == Code::Lammps && k != Knob::Dt {
+                continue;
+            }
+            for &x in v {
+                points.push(Point {
+                    code,
+                    knob: Some(k),
+                    settings: b.with(k, x),
+                    is_default: (x - b.get(k)).abs() <= 1e-12 * x.abs(),
+                });
+            }
+        }
+    }
+    Ok(points)
 }
 
 /// Runs one point for one seed (or reads it from `dir` when an earlier sweep ran the same
@@ -334,7 +342,7 @@ fn run_rust(scene: &Scene, r: &mut Record) -> Result<()> {
                 .filter(|s| s.end != StepEnd::Done)
                 .map(|s| s.steps)
                 .sum();
-            r.state = Some(o.snapshot.status.clone());
+            r.state = Some(o.status);
             let (phi, z, x0, f) = measure(&o.snapshot);
             (r.phi, r.z_star, r.x0, r.forces) = (phi, z, x0, f);
         }
@@ -362,7 +370,7 @@ fn run_external(scene: &Scene, code: Code, dir: &Path, a: &Args, r: &mut Record)
     r.wall_seconds = cr.wall_seconds.unwrap_or(0.0);
     match snap {
         Some(s) => {
-            r.state = Some("time-limit".into());
+            r.state = Some(StepEnd::TimeLimit);
             r.message = Some(format!(
                 "{} runs the deck's fixed number of steps (no equilibrium criteria)",
                 code.name()

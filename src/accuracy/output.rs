@@ -38,7 +38,34 @@ pub fn write_outputs(
     max_time: Option<f64>,
     quiet: bool,
 ) -> Result<()> {
-    // CSV.
+    write_atomic(&out.join("accuracy.csv"), to_csv(t).as_bytes())?;
+    let doc = to_json(base, seeds, t, max_time);
+    write_atomic(
+        &out.join("accuracy.json"),
+        serde_json::to_string_pretty(&doc)?.as_bytes(),
+    )?;
+    let md = to_markdown(base, seeds, t);
+    write_atomic(&out.join("accuracy.md"), md.as_bytes())?;
+    let plotted = plot(out, base, t);
+    if !quiet {
+        print!("{md}");
+    }
+    println!(
+        "wrote {}, {}, {}{}",
+        out.join("accuracy.md").display(),
+        out.join("accuracy.csv").display(),
+        out.join("accuracy.json").display(),
+        if plotted.is_empty() {
+            String::new()
+        } else {
+            format!(" and {} plots (SVG + PNG)", plotted.len())
+        }
+    );
+    Ok(())
+}
+
+/// accuracy.csv: one row per code, knob value and seed-averaged result.
+fn to_csv(t: &Table) -> String {
     let mut csv = String::from("code,knob,value,default,status,wall_seconds,steps,phi,z_star,x0,err_phi,err_z_star,err_x0,ks,combined,pareto,paper_err_phi,paper_err_z_star,paper_err_x0,dt_fraction,inertia_cap,tolerance_factor,kappa\n");
     for r in &t.rows {
         let _ = writeln!(
@@ -69,9 +96,11 @@ pub fn write_outputs(
             r.settings.kappa,
         );
     }
-    write_atomic(&out.join("accuracy.csv"), csv.as_bytes())?;
+    csv
+}
 
-    // JSON.
+/// accuracy.json: the rows, the references and the paper's values, with the run settings.
+fn to_json(base: &Scene, seeds: &[u64], t: &Table, max_time: Option<f64>) -> Value {
     let rows: Vec<Value> = t
         .rows
         .iter()
@@ -115,7 +144,7 @@ pub fn write_outputs(
         .iter()
         .map(|(m, (v, sd))| (*m, json!({"value": v, "sd": sd})))
         .collect();
-    let doc = json!({
+    json!({
         "scene": base.name,
         "seeds": seeds,
         "max_time": max_time,
@@ -126,13 +155,11 @@ pub fn write_outputs(
         "reference": reference,
         "error_definition": "mean over seeds of |metric - reference of the same seed| (phi, z_star, x0); ks: mean over seeds of the two-sample Kolmogorov-Smirnov distance of f = N/<N> to the pooled reference forces; combined: mean of the four errors, each in units of the reference seed spread (or of the sweep's largest error of that metric when there is no spread)",
         "rows": rows,
-    });
-    write_atomic(
-        &out.join("accuracy.json"),
-        serde_json::to_string_pretty(&doc)?.as_bytes(),
-    )?;
+    })
+}
 
-    // Markdown.
+/// accuracy.md: the references, the paper comparison and the table of every knob value.
+fn to_markdown(base: &Scene, seeds: &[u64], t: &Table) -> String {
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -234,9 +261,11 @@ pub fn write_outputs(
         md.push('\n');
     }
     md.push_str("\nKnobs per code: rust — dt, inertia, tolerance, kappa; lammps — dt only (its deck takes our time step; no strain-rate cap of our kind, no equilibrium criteria, κ fixed by the deck).\n");
-    write_atomic(&out.join("accuracy.md"), md.as_bytes())?;
+    md
+}
 
-    // Plots: error against wall time, one per metric and the combined one.
+/// Error against wall time, one plot per metric and the combined one; returns the SVGs.
+fn plot(out: &Path, base: &Scene, t: &Table) -> Vec<String> {
     let mut plotted = Vec::new();
     for m in METRICS.iter().copied().chain(["combined"]) {
         let err_of = |r: &Row| {
@@ -295,19 +324,5 @@ pub fn write_outputs(
             Err(e) => eprintln!("accuracy: no plot of {m}: {e}"),
         }
     }
-    if !quiet {
-        print!("{md}");
-    }
-    println!(
-        "wrote {}, {}, {}{}",
-        out.join("accuracy.md").display(),
-        out.join("accuracy.csv").display(),
-        out.join("accuracy.json").display(),
-        if plotted.is_empty() {
-            String::new()
-        } else {
-            format!(" and {} plots (SVG + PNG)", plotted.len())
-        }
-    );
-    Ok(())
+    plotted
 }

@@ -4,6 +4,7 @@
 use grainbench_comparisons::metrics::{analyze, Options};
 use grainbench_comparisons::outcome::Outcome;
 use grainbench_comparisons::xcode::decks::Code;
+use grainbench_engine::run::StepEnd;
 use grainbench_engine::snapshot::Snapshot;
 use serde_json::{json, Value};
 
@@ -16,7 +17,7 @@ pub struct Record {
     /// validation), `failed`, or why an external code did not run.
     pub outcome: Outcome,
     /// The final state of a run that ran: `equilibrium`, `time-limit`.
-    pub state: Option<String>,
+    pub state: Option<StepEnd>,
     pub message: Option<String>,
     pub wall_seconds: f64,
     /// DEM time steps (hard-sphere collisions not counted).
@@ -31,13 +32,19 @@ pub struct Record {
 impl Record {
     /// Did the run end with a packing to measure (`equilibrium` or `time-limit`)?
     pub fn packing(&self) -> bool {
-        matches!(self.status(), "equilibrium" | "time-limit")
+        self.outcome == Outcome::Ran
+            && matches!(self.state, Some(StepEnd::Equilibrium | StepEnd::TimeLimit))
+    }
+
+    /// Did the run end at equilibrium?
+    pub fn equilibrated(&self) -> bool {
+        self.outcome == Outcome::Ran && self.state == Some(StepEnd::Equilibrium)
     }
 
     /// The final state of a run that ran, else its outcome (`unstable`, `failed`, …).
     pub fn status(&self) -> &str {
         match (self.outcome, &self.state) {
-            (Outcome::Ran, Some(s)) => s,
+            (Outcome::Ran, Some(s)) => s.as_str(),
             (o, _) => o.as_str(),
         }
     }
@@ -65,7 +72,7 @@ impl Record {
         let status = v.get("status")?.as_str()?;
         let (outcome, state) = match Outcome::parse(status) {
             Some(o) if o != Outcome::Ran => (o, None),
-            _ => (Outcome::Ran, Some(status.to_string())),
+            _ => (Outcome::Ran, Some(StepEnd::parse(status)?)),
         };
         Some(Record {
             code: Code::parse(v.get("code")?.as_str()?)?,

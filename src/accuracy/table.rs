@@ -6,6 +6,7 @@ use super::record::{short_message, Record};
 use grainbench_comparisons::report::paper;
 use grainbench_comparisons::stats::{ks_distance, mean, pareto, sample_sd};
 use grainbench_comparisons::xcode::decks::Code;
+use grainbench_engine::run::StepEnd;
 use grainbench_engine::Scene;
 use std::collections::BTreeMap;
 
@@ -236,10 +237,10 @@ pub fn point_status(rr: &[&Record], seeds: usize) -> String {
     if rr.len() < seeds {
         return "missing".into();
     }
-    if rr.iter().all(|r| r.status() == "equilibrium") {
-        "equilibrium".into()
+    if rr.iter().all(|r| r.equilibrated()) {
+        StepEnd::Equilibrium.as_str().into()
     } else {
-        let k = rr.iter().filter(|r| r.status() != "equilibrium").count();
+        let k = rr.iter().filter(|r| !r.equilibrated()).count();
         format!("time-limit ({k}/{seeds} seeds)")
     }
 }

@@ -13,6 +13,7 @@ use grainbench_comparisons::xcode::crosscode::CodeResult;
 use grainbench_comparisons::xcode::decks::{lammps_bench, Code, Deck, Start};
 use grainbench_comparisons::xcode::import::logs;
 use grainbench_engine::run::layout::SUMMARY;
+use grainbench_engine::run::StepEnd;
 use grainbench_engine::scene::Scene;
 use grainbench_engine::snapshot::write_atomic;
 use report::{notes, rows_of, run_line, to_csv, to_markdown, Report, Run};
@@ -221,68 +222,7 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
         a.repeat,
         out.display()
     );
-    // Decks and binaries once; codes that cannot run are rows without runs.
-    let mut setups: Vec<Setup> = Vec::new();
-    for &code in &codes {
-        let mut r = CodeResult::new(code, Outcome::Ran);
-        let ready = match (code, &start) {
-            (Code::Rust, _) => {
-                r.version = Some(format!("grainbench {}", env!("CARGO_PKG_VERSION")));
-                None
-            }
-            (_, Some(st)) => external::prepare(st, code, &mut r),
-            (_, None) => unreachable!("a start is made when external codes run"),
-        };
-        let ready = match (ready, code, mode, &start) {
-            // Adhesion: the bench-only LAMMPS deck (throughput only).
-            (None, Code::Lammps, Mode::Steps { .. }, Some(st))
-                if r.outcome == Outcome::Refused && st.cohesive() =>
-            {
-                match (
-                    Code::Lammps.find(),
-                    lammps_bench::deck(st, lammps_bench::CLASSES),
-                ) {
-                    (Some(bin), Ok(deck)) => {
-                        r.outcome = Outcome::Ran;
-                        r.message = None;
-                        r.deviations = deck.deviations.clone();
-                        eprintln!(
-                            "lammps    bench-only deck: diameters in {} size classes, GRC07 attraction by pair_style table (approximate, throughput only)",
-                            lammps_bench::CLASSES
-                        );
-                        Some((bin, deck))
-                    }
-                    _ => None,
-                }
-            }
-            (ready, ..) => ready,
-        };
-        if code != Code::Rust && ready.is_none() {
-            eprintln!(
-                "{:<9} {}: {}",
-                code.name(),
-                r.outcome,
-                r.message.as_deref().unwrap_or("")
-            );
-        }
-        if code != Code::Rust
-            && matches!(code, Code::Lammps | Code::Liggghts)
-            && a.threads.iter().any(|&t| t > 1)
-            && grainbench_comparisons::xcode::decks::which("mpirun").is_none()
-            && ready.is_some()
-        {
-            r.outcome = Outcome::Missing;
-            r.message = Some("`mpirun` not found on PATH (needed for threads > 1); install with `apt-get install -y --no-install-recommends openmpi-bin`".into());
-            eprintln!(
-                "{:<9} missing: {}",
-                code.name(),
-                r.message.as_deref().unwrap_or("")
-            );
-            setups.push((code, r, None));
-            continue;
-        }
-        setups.push((code, r, ready));
-    }
+    let mut setups = prepare(&codes, start.as_ref(), mode, a);
     let total = a.repeat
         * a.threads.len()
         * setups
@@ -376,6 +316,72 @@ fn bench_scene(a: &Args, spec: &str) -> Result<i32> {
     Ok(if STOP.load(Ordering::SeqCst) { 130 } else { 0 })
 }
 
+/// Each code's deck and binary, once: a code that cannot run is a row without runs, with why.
+fn prepare(codes: &[Code], start: Option<&Start>, mode: Mode, a: &Args) -> Vec<Setup> {
+    let mut setups: Vec<Setup> = Vec::new();
+    for &code in codes {
+        let mut r = CodeResult::new(code, Outcome::Ran);
+        let ready = match (code, start) {
+            (Code::Rust, _) => {
+                r.version = Some(format!("grainbench {}", env!("CARGO_PKG_VERSION")));
+                None
+            }
+            (_, Some(st)) => external::prepare(st, code, &mut r),
+            (_, None) => unreachable!("a start is made when external codes run"),
+        };
+        let ready = match (ready, code, mode, start) {
+            // Adhesion: the bench-only LAMMPS deck (throughput only).
+            (None, Code::Lammps, Mode::Steps { .. }, Some(st))
+                if r.outcome == Outcome::Refused && st.cohesive() =>
+            {
+                match (
+                    Code::Lammps.find(),
+                    lammps_bench::deck(st, lammps_bench::CLASSES),
+                ) {
+                    (Some(bin), Ok(deck)) => {
+                        r.outcome = Outcome::Ran;
+                        r.message = None;
+                        r.deviations = deck.deviations.clone();
+                        eprintln!(
+                            "lammps    bench-only deck: diameters in {} size classes, GRC07 attraction by pair_style table (approximate, throughput only)",
+                            lammps_bench::CLASSES
+                        );
+                        Some((bin, deck))
+                    }
+                    _ => None,
+                }
+            }
+            (ready, ..) => ready,
+        };
+        if code != Code::Rust && ready.is_none() {
+            eprintln!(
+                "{:<9} {}: {}",
+                code.name(),
+                r.outcome,
+                r.message.as_deref().unwrap_or("")
+            );
+        }
+        if code != Code::Rust
+            && matches!(code, Code::Lammps | Code::Liggghts)
+            && a.threads.iter().any(|&t| t > 1)
+            && grainbench_comparisons::xcode::decks::which("mpirun").is_none()
+            && ready.is_some()
+        {
+            r.outcome = Outcome::Missing;
+            r.message = Some("`mpirun` not found on PATH (needed for threads > 1); install with `apt-get install -y --no-install-recommends openmpi-bin`".into());
+            eprintln!(
+                "{:<9} missing: {}",
+                code.name(),
+                r.message.as_deref().unwrap_or("")
+            );
+            setups.push((code, r, None));
+            continue;
+        }
+        setups.push((code, r, ready));
+    }
+    setups
+}
+
 fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut Run) -> Result<()> {
     if dir.exists() {
         std::fs::remove_dir_all(dir).with_context(|| format!("clearing {}", dir.display()))?;
@@ -432,7 +438,7 @@ fn run_rust(scene_file: &Path, dir: &Path, threads: usize, a: &Args, run: &mut R
     let (mut steps, mut loop_s, mut prelude) = (0u64, 0.0, 0.0);
     for s in summary["steps"].as_array().into_iter().flatten() {
         let wall = s["wall_seconds"].as_f64().unwrap_or(0.0);
-        if s["end"] == "done" {
+        if s["end"].as_str().and_then(StepEnd::parse) == Some(StepEnd::Done) {
             // Hard-grain stage: `steps` counts collisions.
             prelude += wall;
         } else {

@@ -32,8 +32,35 @@ fn mode(x: &[f64], y: &[f64]) -> f64 {
 /// Markdown rendering: a title line and one table `metric | value | note`.
 pub fn to_markdown(a: &Analysis) -> String {
     let mut rows: Vec<(String, String, String)> = Vec::new();
-    let mut row = |m: &str, v: String, note: &str| rows.push((m.into(), v, note.into()));
+    {
+        let mut row = |m: &str, v: String, note: &str| rows.push((m.into(), v, note.into()));
+        coordination_rows(a, &mut row);
+        force_rows(a, &mut row);
+        structure_rows(a, &mut row);
+        density_rows(a, &mut row);
+        moduli_rows(a, &mut row);
+        pressure_rows(a, &mut row);
+    }
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "## {} ({}, step {}, t = {}, {})\n",
+        a.scene,
+        a.code,
+        a.step,
+        sig6(a.time),
+        a.status
+    );
+    out.push_str("| metric | value | note |\n| --- | --- | --- |\n");
+    for (m, v, n) in rows {
+        let _ = writeln!(out, "| {m} | {v} | {} |", n.replace('|', "\\|"));
+    }
+    out
+}
 
+/// The grains and their contacts: Φ, z, the rattlers (AR07 §III.B–C), x_k, and the split of
+/// cohesive interactions by force sign (GRC07 T.VI).
+fn coordination_rows(a: &Analysis, row: &mut dyn FnMut(&str, String, &str)) {
     row("n", a.n.to_string(), "grains");
     row("dimension", a.dimension.to_string(), "");
     row(
@@ -138,6 +165,11 @@ pub fn to_markdown(a: &Analysis) -> String {
         row("N−", opt(s.mean_attractive), "mean |attractive force|");
         row("N−^(2)", opt(s.rms_attractive), "quadratic mean");
     }
+}
+
+/// The contact forces: ⟨N⟩, Z(2), Z(5/3), X1, M1, M2 (AR07 (27)–(28), T.VI), P(f) and the
+/// force angles.
+fn force_rows(a: &Analysis, row: &mut dyn FnMut(&str, String, &str)) {
     let f = &a.forces;
     row("⟨N⟩", opt(f.mean_normal), "over the N_c contacts");
     row("Z(2)", opt(f.z2), "⟨N²⟩/⟨N⟩², AR07 (27)");
@@ -186,6 +218,11 @@ pub fn to_markdown(a: &Analysis) -> String {
             ),
         );
     }
+}
+
+/// The structure: g(r), z(h), bond order and local environments (AR07 §III.D, T.II,
+/// T.VII–T.VIII).
+fn structure_rows(a: &Analysis, row: &mut dyn FnMut(&str, String, &str)) {
     let st = &a.structure;
     if let Some(g) = &st.pair_correlation {
         row(
@@ -273,6 +310,10 @@ pub fn to_markdown(a: &Analysis) -> String {
             ),
         );
     }
+}
+
+/// The density correlations of 2D cohesive packings (GRC07 §V).
+fn density_rows(a: &Analysis, row: &mut dyn FnMut(&str, String, &str)) {
     if let Some(c) = &a.density {
         match &c.fit {
             Some(f) => row(
@@ -315,6 +356,10 @@ pub fn to_markdown(a: &Analysis) -> String {
             ),
         );
     }
+}
+
+/// The elastic moduli and rigidity (GRC08 §VI, GRC07 App. A), where asked for.
+fn moduli_rows(a: &Analysis, row: &mut dyn FnMut(&str, String, &str)) {
     match &a.moduli {
         Some(Ok(m)) => {
             row(
@@ -373,6 +418,10 @@ pub fn to_markdown(a: &Analysis) -> String {
         Some(Err(e)) => row("B, G", "n/a".into(), e),
         None => {}
     }
+}
+
+/// The pressure and its checks (AR07 (22), Rumpf, GRC07 (18)).
+fn pressure_rows(a: &Analysis, row: &mut dyn FnMut(&str, String, &str)) {
     let p = &a.pressure;
     row("P measured", opt(p.measured), "tr σ_contact / d");
     row("P kinetic", opt(p.kinetic), "tr σ_kinetic / d");
@@ -421,20 +470,4 @@ pub fn to_markdown(a: &Analysis) -> String {
             ),
         );
     }
-
-    let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "## {} ({}, step {}, t = {}, {})\n",
-        a.scene,
-        a.code,
-        a.step,
-        sig6(a.time),
-        a.status
-    );
-    out.push_str("| metric | value | note |\n| --- | --- | --- |\n");
-    for (m, v, n) in rows {
-        let _ = writeln!(out, "| {m} | {v} | {} |", n.replace('|', "\\|"));
-    }
-    out
 }

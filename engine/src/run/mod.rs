@@ -149,7 +149,10 @@ fn run_dim<D: Dim>(scene: &Scene, opts: &mut RunOptions) -> Result<Outcome, RunE
             let _ = std::fs::remove_file(&spec.path);
         }
     }
+    let status = StepEnd::of_run(interrupted, &ctx.reports);
+    debug_assert_eq!(status.as_str(), snapshot.status);
     Ok(Outcome {
+        status,
         snapshot,
         steps: ctx.reports,
         dt: ctx.dt,
@@ -246,13 +249,7 @@ fn run_law<D: Dim, L: ContactLaw<D>>(
     }?;
     ctx.neighbor_builds += sys.nlist.builds - builds0;
     ctx.at_threshold = ctx.contacts_at_threshold(&sys);
-    let status = if stopped {
-        StepEnd::Interrupted
-    } else if ctx.reports.iter().all(|r| r.end.ok()) {
-        StepEnd::Equilibrium
-    } else {
-        StepEnd::TimeLimit
-    };
+    let status = StepEnd::of_run(stopped, &ctx.reports);
     sys.shed_step_buffers();
     let snap = snapshot_of(&sys, ctx.plan(), status.as_str(), ctx.pressure());
     ctx.grains = Grains {

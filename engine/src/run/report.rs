@@ -86,6 +86,31 @@ pub enum StepEnd {
 }
 
 impl StepEnd {
+    const ALL: [StepEnd; 5] = [
+        StepEnd::Equilibrium,
+        StepEnd::OneCluster,
+        StepEnd::Done,
+        StepEnd::TimeLimit,
+        StepEnd::Interrupted,
+    ];
+
+    /// How a whole run ended: `interrupted` when stopped, `equilibrium` when every stage
+    /// reached what it was run for, else `time-limit` (the status of its final snapshot).
+    pub fn of_run(stopped: bool, steps: &[StepReport]) -> StepEnd {
+        if stopped {
+            StepEnd::Interrupted
+        } else if steps.iter().all(|r| r.end.ok()) {
+            StepEnd::Equilibrium
+        } else {
+            StepEnd::TimeLimit
+        }
+    }
+
+    /// The end [`Self::as_str`] names (`None` for any other text).
+    pub fn parse(text: &str) -> Option<StepEnd> {
+        Self::ALL.into_iter().find(|e| e.as_str() == text)
+    }
+
     pub fn as_str(self) -> &'static str {
         match self {
             StepEnd::Equilibrium => "equilibrium",
@@ -133,6 +158,8 @@ pub struct StepReport {
 /// Result of a whole run.
 #[derive(Clone, Debug)]
 pub struct Outcome {
+    /// How the run ended ([`StepEnd::of_run`]; the snapshot's status names it).
+    pub status: StepEnd,
     pub snapshot: Snapshot,
     pub steps: Vec<StepReport>,
     /// Time step and the stiffness it was derived from.

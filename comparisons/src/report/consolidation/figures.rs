@@ -6,8 +6,37 @@ use super::levels::{loading_level, same_pressure, Level, SCATTERING_AT};
 use crate::metrics::consolidation::{ConsolidationFit, ConsolidationLaw};
 use crate::metrics::density;
 use crate::metrics::fractal_fit::FractalFit;
+use crate::report::figures::Written;
 use crate::report::plots::{self, PlotError};
 use std::path::{Path, PathBuf};
+
+/// Every plot of the curves: Φ(P*) ([`plot`]), z, the moduli, I(k) along the cycle and the
+/// blob size, in that order; a plot that cannot be drawn is a warning.
+pub fn all(
+    out: &Path,
+    seeds: &[SeedCurve],
+    mean: Option<&MeanCurve>,
+    paper: Option<(ConsolidationLaw, String)>,
+    cycle_ik: &[(f64, &'static str, density::MeanScattering)],
+) -> Written {
+    let mut written = Written::default();
+    for (what, r) in [
+        ("consolidation plot", plot(out, seeds, mean, paper)),
+        ("coordination plot", plot_coordination(out, seeds)),
+        ("moduli plot", plot_moduli(out, seeds)),
+        (
+            "I(k) plot of the cycle",
+            plot_scattering(out, seeds, cycle_ik),
+        ),
+        ("blob-size plot", plot_blob_size(out, seeds)),
+    ] {
+        match r {
+            Ok(files) => written.files.extend(files),
+            Err(e) => written.warnings.push(format!("no {what}: {e}")),
+        }
+    }
+    written
+}
 
 /// Φ(P*) of every seed (loading and unloading levels, markers), the seeds' mean with its
 /// s.d. band and its fit by GRC08 (9) when there are several seeds (each seed's fit when there
