@@ -100,37 +100,7 @@ pub fn build_table(
             .map(|r| (r.seed, *r))
             .collect();
         let pooled: Vec<f64> = ref_ok.values().flat_map(|r| r.forces.clone()).collect();
-        let mut rs = ReferenceStats {
-            settings: Some(rp.settings),
-            status: point_status(&ref_recs, seeds.len()),
-            wall_seconds: mean(&ref_recs.iter().map(|r| r.wall_seconds).collect::<Vec<_>>()),
-            ..Default::default()
-        };
-        for m in ["phi", "z_star", "x0"] {
-            let v: Vec<f64> = ref_ok.values().filter_map(|r| metric_of(r, m)).collect();
-            if let Some(x) = mean(&v) {
-                rs.mean.insert(m, x);
-            }
-            if let Some(s) = sample_sd(&v) {
-                rs.spread.insert(m, s);
-            }
-        }
-        if ref_ok.len() >= 2 {
-            let loo: Vec<f64> = ref_ok
-                .iter()
-                .filter_map(|(s, r)| {
-                    let others: Vec<f64> = ref_ok
-                        .iter()
-                        .filter(|(s2, _)| *s2 != s)
-                        .flat_map(|(_, r2)| r2.forces.iter().copied())
-                        .collect();
-                    ks_distance(&r.forces, &others)
-                })
-                .collect();
-            if let Some(x) = mean(&loo) {
-                rs.spread.insert("ks", x);
-            }
-        }
+        let rs = reference_stats(rp, &ref_recs, &ref_ok, seeds.len());
         let mut code_rows = Vec::new();
         for p in points.iter().filter(|p| p.code == code && p.knob.is_some()) {
             let rr = recs(p);
@@ -180,34 +150,7 @@ pub fn build_table(
             }
             code_rows.push(row);
         }
-        // Combined error: each metric's error in units of the reference's seed spread (or,
-        // without one, of the largest error of that metric in the sweep), averaged.
-        let scale: BTreeMap<&str, f64> = METRICS
-            .iter()
-            .map(|&m| {
-                let s = rs.spread.get(m).copied().filter(|s| *s > 0.0);
-                let max = code_rows
-                    .iter()
-                    .filter_map(|r| r.errors.get(m))
-                    .fold(0.0f64, |a, &b| a.max(b));
-                (m, s.unwrap_or(if max > 0.0 { max } else { 1.0 }))
-            })
-            .collect();
-        for row in &mut code_rows {
-            if row.errors.len() == METRICS.len() {
-                let c: Vec<f64> = METRICS.iter().map(|m| row.errors[m] / scale[m]).collect();
-                row.combined = mean(&c);
-            }
-        }
-        // The Pareto front over distinct settings (the scene's own point is in every curve).
-        let pts: Vec<Option<(f64, f64)>> = code_rows
-            .iter()
-            .map(|r| Some((r.wall_seconds?, r.combined?)))
-            .collect();
-        let front = pareto(&pts);
-        for (row, f) in code_rows.iter_mut().zip(front) {
-            row.pareto = f;
-        }
+        combine(&mut code_rows, &rs);
         reference.insert(code.name(), rs);
         rows.extend(code_rows);
     }
@@ -216,6 +159,80 @@ pub fn build_table(
         reference,
         paper_state,
         paper: paper_vals,
+    }
+}
+
+/// The reference point of a code over its seeds: Φ, z*, x0 (mean and seed spread) and the
+/// leave-one-out KS distance of each seed's P(f) to the others' (the spread of `ks`).
+fn reference_stats(
+    rp: &Point,
+    ref_recs: &[&Record],
+    ref_ok: &BTreeMap<u64, &Record>,
+    seeds: usize,
+) -> ReferenceStats {
+    let mut rs = ReferenceStats {
+        settings: Some(rp.settings),
+        status: point_status(ref_recs, seeds),
+        wall_seconds: mean(&ref_recs.iter().map(|r| r.wall_seconds).collect::<Vec<_>>()),
+        ..Default::default()
+    };
+    for m in ["phi", "z_star", "x0"] {
+        let v: Vec<f64> = ref_ok.values().filter_map(|r| metric_of(r, m)).collect();
+        if let Some(x) = mean(&v) {
+            rs.mean.insert(m, x);
+        }
+        if let Some(s) = sample_sd(&v) {
+            rs.spread.insert(m, s);
+        }
+    }
+    if ref_ok.len() >= 2 {
+        let loo: Vec<f64> = ref_ok
+            .iter()
+            .filter_map(|(s, r)| {
+                let others: Vec<f64> = ref_ok
+                    .iter()
+                    .filter(|(s2, _)| *s2 != s)
+                    .flat_map(|(_, r2)| r2.forces.iter().copied())
+                    .collect();
+                ks_distance(&r.forces, &others)
+            })
+            .collect();
+        if let Some(x) = mean(&loo) {
+            rs.spread.insert("ks", x);
+        }
+    }
+    rs
+}
+
+/// Each row's combined error and whether it is on the Pareto front of cost against it.
+fn combine(code_rows: &mut [Row], rs: &ReferenceStats) {
+    // Combined error: each metric's error in units of the reference's seed spread (or,
+    // without one, of the largest error of that metric in the sweep), averaged.
+    let scale: BTreeMap<&str, f64> = METRICS
+        .iter()
+        .map(|&m| {
+            let s = rs.spread.get(m).copied().filter(|s| *s > 0.0);
+            let max = code_rows
+                .iter()
+                .filter_map(|r| r.errors.get(m))
+                .fold(0.0f64, |a, &b| a.max(b));
+            (m, s.unwrap_or(if max > 0.0 { max } else { 1.0 }))
+        })
+        .collect();
+    for row in code_rows.iter_mut() {
+        if row.errors.len() == METRICS.len() {
+            let c: Vec<f64> = METRICS.iter().map(|m| row.errors[m] / scale[m]).collect();
+            row.combined = mean(&c);
+        }
+    }
+    // The Pareto front over distinct settings (the scene's own point is in every curve).
+    let pts: Vec<Option<(f64, f64)>> = code_rows
+        .iter()
+        .map(|r| Some((r.wall_seconds?, r.combined?)))
+        .collect();
+    let front = pareto(&pts);
+    for (row, f) in code_rows.iter_mut().zip(front) {
+        row.pareto = f;
     }
 }
 

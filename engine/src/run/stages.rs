@@ -8,9 +8,10 @@ use super::checks::{
 };
 use super::checks::{FLIP_CHECKS, FLIP_CORRELATION};
 use super::grains::Grains;
-use super::options::{CheckpointSpec, RunOptions};
+use super::options::{CheckpointSpec, DumpSpec, RunOptions};
 use super::output::snapshot_of;
-use super::relax::StageWatch;
+use super::quench::Quenched;
+use super::relax::{Relaxation, StageWatch};
 use super::report::{AtThreshold, Checks, Progress, RunError, StepEnd, StepReport};
 use super::setup::{build_system, initial_grains};
 use crate::cell::Control;
@@ -23,7 +24,7 @@ use crate::plan::{self, HardStage, Plan, PlanStage, PlanStep, StageKind};
 use crate::protocols::event_driven::HardSpheres;
 use crate::scene::{Scene, Step};
 use crate::snapshot::Snapshot;
-use crate::system::{State, StateRef, System};
+use crate::system::{LastGood, State, StateRef, System};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -345,40 +346,9 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         let stage: PlanStage = *plan.steps[k].dem().expect("run_stages runs DEM stages");
         let kind = stage.kind.name();
         ctx.current = Some(k);
-        // κ of the stage; the time step follows.
-        sys.law = base_law.with_kappa_scaled(stage.kappa_factor);
-        debug_assert_eq!(
-            plan::time_step(
-                &sys.law,
-                &sys.mass,
-                &sys.radius,
-                plan.dt_fraction,
-                plan.stiffness_force
-            ),
-            (stage.dt, stage.k_max),
-            "the plan's time step is the typed law's"
-        );
-        sys.dt = stage.dt;
+        configure(sys, base_law, &stage, &plan);
         ctx.dt = stage.dt;
         ctx.k_max = stage.k_max;
-        match stage.kind {
-            StageKind::Compress { pressure } => {
-                let mut target = D::V::zero();
-                for a in 0..D::D {
-                    target[a] = pressure;
-                }
-                sys.cell.control = Control::Stress {
-                    target,
-                    rate_cap: stage.max_strain_rate,
-                    servo: stage.servo_gain,
-                };
-            }
-            _ => {
-                sys.cell.control = Control::Fixed;
-                sys.cell.ldot = D::V::zero();
-            }
-        }
-        let aggregate = stage.kind == StageKind::Aggregate;
         let full_time = stage.kind == StageKind::FixedVolume { full_time: true };
         let max_time = stage.max_time;
         let (t0, steps0, wall0, mut watch) = match resume_at.take() {
@@ -421,40 +391,16 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 if let Some(f) = watch.fire.as_mut() {
                     f.after_step(sys);
                 }
-                let (ov, i, j) = sys.max_overlap;
+                let (ov, ..) = sys.max_overlap;
                 if ov.is_nan() || ov > stage.max_overlap {
-                    return Err(unstable(
-                        &plan,
-                        &stage,
-                        sys,
-                        &last_good,
-                        if ov.is_nan() {
-                            "non-finite positions or forces".to_string()
-                        } else {
-                            format!(
-                                "overlap of {ov:.3} times the smaller radius between grains {i} and {j} (limit numerics.max_overlap = {})",
-                                stage.max_overlap
-                            )
-                        },
-                    ));
+                    return Err(overlap_error(&plan, &stage, sys, &last_good));
                 }
             }
             links_into(sys, &mut inter);
             checks = measure(sys, &stage, &inter);
             if let Some(cb) = opts.progress.as_mut() {
                 let stressed = matches!(sys.cell.control, Control::Stress { .. });
-                let wrapped_axes = (first_check && stressed).then(|| {
-                    // The pairs only: each branch is computed again when the walk reaches it.
-                    let mut edges = Vec::with_capacity(inter.len());
-                    sys.for_each_interaction(|c| edges.push((c.i as u32, c.j as u32)));
-                    network::wrapped_axes(
-                        &sys.cell.l.to_vec(),
-                        sys.len(),
-                        &edges,
-                        |&(i, j)| (i as usize, j as usize),
-                        |&(i, j)| branch::<D>(&sys.s[i as usize], &sys.s[j as usize], &sys.cell.l),
-                    )
-                });
+                let wrapped_axes = (first_check && stressed).then(|| wrapped_axes(sys, &inter));
                 first_check = false;
                 cb(&Progress {
                     step_index: k,
@@ -470,127 +416,29 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
                 });
             }
             if let Some(d) = opts.dump.as_mut() {
-                let frame = (sys.time / d.every).floor() as u64;
-                if d.last != Some(frame) {
-                    d.last = Some(frame);
-                    (d.sink)(&snapshot_of(sys, &plan, "running", stage.pressure));
-                }
+                dump_frame(d, sys, &plan, &stage);
             }
-            // Time step past stability: the fastest modes flip sign at every step (the
-            // integrator's amplification is real and negative) and, held by the nonlinear
-            // contacts, oscillate for ever instead of blowing up: a packing that never
-            // equilibrates, denser than it should be.
-            let flip = step_correlation(&prev_force, &sys.force)
-                .min(step_correlation(&prev_torque, &sys.torque));
-            flips = if flip < FLIP_CORRELATION && !checks.equilibrium() {
-                flips + 1
-            } else {
-                0
-            };
-            if flips >= FLIP_CHECKS {
-                return Err(unstable(
-                    &plan,
-                    &stage,
-                    sys,
-                    &last_good,
-                    format!(
-                        "the net forces on the grains reverse at every time step (correlation of consecutive steps {flip:.2} at {flips} consecutive checks, force/criterion = {:.2e}): the fastest contact vibration has fewer than four time steps per period, the integration no longer follows the dynamics and the packing would be wrong",
-                        checks.force_ratio
-                    ),
-                ));
-            }
-            let finite = checks.kinetic_per_grain.is_finite()
-                && checks.force_ratio.is_finite()
-                && checks.pressure.is_finite()
-                && sys.cell.l.is_finite();
-            if !finite {
-                return Err(unstable(
-                    &plan,
-                    &stage,
-                    sys,
-                    &last_good,
-                    "non-finite velocities, forces or cell lengths".into(),
-                ));
-            }
-            // The cell may shrink below the minimum-image limit while compressing (with
-            // `count = 8` a pair touching through two images was counted once).
-            if let Err(e) = sys.check_cell() {
-                return Err(stopped(
-                    &plan,
-                    sys,
-                    &last_good,
-                    format!("the cell shrank during the stage: {e} (particles.count): a pair would interact through two periodic images, which the minimum-image convention counts once"),
-                ));
-            }
-            if checks.kinetic_per_grain > 1e4 * (stage.f_ref + ke0) {
-                return Err(unstable(
-                    &plan,
-                    &stage,
-                    sys,
-                    &last_good,
-                    format!(
-                        "kinetic energy per grain exploded to {:.3e} (force unit × a)",
-                        checks.kinetic_per_grain
-                    ),
-                ));
-            }
-            sys.save(&mut last_good);
-            let observed = watch.watching()
-                && watch.observe_structure(
-                    sys.time,
-                    settle_view(
-                        sys,
-                        &stage,
-                        &inter,
-                        &checks,
-                        watch.free_rollers(),
-                        watch.settle_factor(),
-                    ),
-                    &mut pair_list(&inter),
-                    checks.packing_fraction,
-                    &sys.s,
-                );
-            if observed {
-                watch.start_fire(sys.dt);
-                if let Some(z) = watch.tangential_zeta() {
-                    sys.law = sys.law.with_tangential_damping(z);
-                }
-            }
-            watch.peak_strain_rate = watch.peak_strain_rate.max(checks.strain_rate);
-            // Not in stages that end otherwise than on the criteria (one cluster, full time).
-            if stage.quench && checks.only_kinetic_fails() {
-                watch.quench.record(
-                    sys.time,
-                    sys.kinetic_energy() / n,
-                    || pair_list(&inter),
-                    checks.packing_fraction,
-                    &sys.s,
-                );
-                sys.quench();
-            }
+            guard(
+                &plan,
+                &stage,
+                sys,
+                &mut last_good,
+                &checks,
+                (&prev_force, &prev_torque),
+                &mut flips,
+                ke0,
+            )?;
+            watch_phases(sys, &stage, &mut watch, &inter, &checks);
             let held = watch.held(sys.time, checks.equilibrium(), stage.window);
-            if aggregate && checks.clusters == 1 {
-                end = StepEnd::OneCluster;
-                break;
-            }
-            if !aggregate && !full_time && held {
-                end = StepEnd::Equilibrium;
-                break;
-            }
-            if sys.time - t0 >= max_time {
-                end = StepEnd::TimeLimit;
-                break;
-            }
-            if opts.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-                end = StepEnd::Interrupted;
+            let stop = opts.stop.is_some_and(|s| s.load(Ordering::Relaxed));
+            if let Some(e) = ends_now(stage.kind, &checks, held, sys.time - t0 >= max_time, stop) {
+                end = e;
                 break;
             }
             if let Some(spec) = &opts.checkpoint {
                 if ctx.last_checkpoint.elapsed().as_secs_f64() >= spec.every {
                     let wall = wall0 + step_start.elapsed().as_secs_f64();
-                    let h = ctx.header(k, true, t0, steps0, wall);
-                    let payload = PayloadRef::Inside(sys.state_ref(), &watch);
-                    write_checkpoint(ctx, spec, &h, &payload)?;
+                    checkpoint_inside(ctx, spec, sys, &watch, (k, t0, steps0, wall))?;
                     ctx.last_checkpoint = Instant::now();
                 }
             }
@@ -605,26 +453,11 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         if end == StepEnd::Interrupted {
             // Resumable from exactly here.
             if let Some(spec) = &opts.checkpoint {
-                let h = ctx.header(k, true, t0, steps0, wall);
-                let payload = PayloadRef::Inside(sys.state_ref(), &watch);
-                write_checkpoint(ctx, spec, &h, &payload)?;
+                checkpoint_inside(ctx, spec, sys, &watch, (k, t0, steps0, wall))?;
             }
         }
         // The final pairs are listed once, and only when a report compares with them.
-        let (relaxation, quench) = if watch.damping_on() || watch.quench.any() {
-            let pairs = &mut {
-                let mut links = Vec::new();
-                links_into(sys, &mut links);
-                pair_list(&links)
-            };
-            let (phi, s, l) = (sys.packing_fraction(), &sys.s, sys.cell.l);
-            (
-                watch.report(t0, pairs, phi, s, l),
-                watch.quench.report(t0, pairs, phi, s, l),
-            )
-        } else {
-            (None, None)
-        };
+        let (relaxation, quench) = phase_reports(sys, &mut watch, t0);
         ctx.reports.push(StepReport {
             index: k,
             kind: kind.into(),
@@ -642,15 +475,288 @@ pub(super) fn run_stages<D: Dim, L: ContactLaw<D>>(
         }
         if let Some(hook) = opts.stage_end.as_mut() {
             let report = ctx.reports.last().expect("pushed above");
-            let status = if end.ok() {
-                "equilibrium"
-            } else {
-                end.as_str()
-            };
-            hook(report, &snapshot_of(sys, &plan, status, stage.pressure));
+            // The state a stage that reached its end leaves is an equilibrium state.
+            let status = if end.ok() { StepEnd::Equilibrium } else { end };
+            hook(
+                report,
+                &snapshot_of(sys, &plan, status.as_str(), stage.pressure),
+            );
         }
     }
     Ok(false)
+}
+
+/// After the steps of a check, the signs that the run blew up, each an error carrying the last
+/// state that passed them; else the state becomes the last good one. `prev` holds the forces
+/// and torques of the step before the check's last, `flips` the checks in a row whose
+/// consecutive forces reverse.
+#[allow(clippy::too_many_arguments)]
+fn guard<D: Dim, L: ContactLaw<D>>(
+    plan: &Plan,
+    stage: &PlanStage,
+    sys: &mut System<D, L>,
+    last_good: &mut Option<LastGood<D, L>>,
+    checks: &Checks,
+    prev: (&[D::V], &[D::Ang]),
+    flips: &mut u32,
+    ke0: f64,
+) -> Result<(), RunError> {
+    // Time step past stability: the fastest modes flip sign at every step (the
+    // integrator's amplification is real and negative) and, held by the nonlinear
+    // contacts, oscillate for ever instead of blowing up: a packing that never
+    // equilibrates, denser than it should be.
+    let flip = step_correlation(prev.0, &sys.force).min(step_correlation(prev.1, &sys.torque));
+    *flips = if flip < FLIP_CORRELATION && !checks.equilibrium() {
+        *flips + 1
+    } else {
+        0
+    };
+    if *flips >= FLIP_CHECKS {
+        return Err(unstable(
+            plan,
+            stage,
+            sys,
+            last_good,
+            format!(
+                "the net forces on the grains reverse at every time step (correlation of consecutive steps {flip:.2} at {flips} consecutive checks, force/criterion = {:.2e}): the fastest contact vibration has fewer than four time steps per period, the integration no longer follows the dynamics and the packing would be wrong",
+                checks.force_ratio
+            ),
+        ));
+    }
+    let finite = checks.kinetic_per_grain.is_finite()
+        && checks.force_ratio.is_finite()
+        && checks.pressure.is_finite()
+        && sys.cell.l.is_finite();
+    if !finite {
+        return Err(unstable(
+            plan,
+            stage,
+            sys,
+            last_good,
+            "non-finite velocities, forces or cell lengths".into(),
+        ));
+    }
+    // The cell may shrink below the minimum-image limit while compressing (with
+    // `count = 8` a pair touching through two images was counted once).
+    if let Err(e) = sys.check_cell() {
+        return Err(stopped(
+            plan,
+            sys,
+            last_good,
+            format!("the cell shrank during the stage: {e} (particles.count): a pair would interact through two periodic images, which the minimum-image convention counts once"),
+        ));
+    }
+    if checks.kinetic_per_grain > 1e4 * (stage.f_ref + ke0) {
+        return Err(unstable(
+            plan,
+            stage,
+            sys,
+            last_good,
+            format!(
+                "kinetic energy per grain exploded to {:.3e} (force unit × a)",
+                checks.kinetic_per_grain
+            ),
+        ));
+    }
+    sys.save(last_good);
+    Ok(())
+}
+
+/// Sets `sys` up for `stage`: κ (the time step follows, as the plan resolved it) and the
+/// cell's control, a stress target with its rate cap or a fixed cell at rest.
+fn configure<D: Dim, L: ContactLaw<D>>(
+    sys: &mut System<D, L>,
+    base_law: L,
+    stage: &PlanStage,
+    plan: &Plan,
+) {
+    sys.law = base_law.with_kappa_scaled(stage.kappa_factor);
+    debug_assert_eq!(
+        plan::time_step(
+            &sys.law,
+            &sys.mass,
+            &sys.radius,
+            plan.dt_fraction,
+            plan.stiffness_force
+        ),
+        (stage.dt, stage.k_max),
+        "the plan's time step is the typed law's"
+    );
+    sys.dt = stage.dt;
+    match stage.kind {
+        StageKind::Compress { pressure } => {
+            let mut target = D::V::zero();
+            for a in 0..D::D {
+                target[a] = pressure;
+            }
+            sys.cell.control = Control::Stress {
+                target,
+                rate_cap: stage.max_strain_rate,
+                servo: stage.servo_gain,
+            };
+        }
+        _ => {
+            sys.cell.control = Control::Fixed;
+            sys.cell.ldot = D::V::zero();
+        }
+    }
+}
+
+/// The axes along which the contact network wraps around the cell
+/// ([`network::wrapped_axes`]), from the pairs only: each branch is computed again when the
+/// walk reaches it.
+fn wrapped_axes<D: Dim, L: ContactLaw<D>>(sys: &System<D, L>, inter: &[Link]) -> Vec<bool> {
+    let mut edges = Vec::with_capacity(inter.len());
+    sys.for_each_interaction(|c| edges.push((c.i as u32, c.j as u32)));
+    network::wrapped_axes(
+        &sys.cell.l.to_vec(),
+        sys.len(),
+        &edges,
+        |&(i, j)| (i as usize, j as usize),
+        |&(i, j)| branch::<D>(&sys.s[i as usize], &sys.s[j as usize], &sys.cell.l),
+    )
+}
+
+/// The reports of a stage's relaxation and quenches, against its final pairs (listed once,
+/// and only when a report compares with them).
+fn phase_reports<D: Dim, L: ContactLaw<D>>(
+    sys: &System<D, L>,
+    watch: &mut StageWatch<D>,
+    t0: f64,
+) -> (Option<Relaxation>, Option<Quenched>) {
+    if !(watch.damping_on() || watch.quench.any()) {
+        return (None, None);
+    }
+    let pairs = &mut {
+        let mut links = Vec::new();
+        links_into(sys, &mut links);
+        pair_list(&links)
+    };
+    let (phi, s, l) = (sys.packing_fraction(), &sys.s, sys.cell.l);
+    (
+        watch.report(t0, pairs, phi, s, l),
+        watch.quench.report(t0, pairs, phi, s, l),
+    )
+}
+
+/// A checkpoint inside stage `at.0` (started at time `at.1` and step `at.2`, `at.3` seconds of
+/// wall time so far): the integrator and what the stage watches, resumable from exactly here.
+fn checkpoint_inside<D: Dim, L: ContactLaw<D>>(
+    ctx: &Ctx<D>,
+    spec: &CheckpointSpec,
+    sys: &System<D, L>,
+    watch: &StageWatch<D>,
+    at: (usize, f64, u64, f64),
+) -> Result<(), RunError> {
+    let (k, t0, steps0, wall) = at;
+    let h = ctx.header(k, true, t0, steps0, wall);
+    let payload = PayloadRef::Inside(sys.state_ref(), watch);
+    write_checkpoint(ctx, spec, &h, &payload)
+}
+
+/// The error of a check's step whose largest overlap is not finite or beyond the stage's
+/// limit (`numerics.max_overlap`).
+fn overlap_error<D: Dim, L: ContactLaw<D>>(
+    plan: &Plan,
+    stage: &PlanStage,
+    sys: &mut System<D, L>,
+    last_good: &Option<LastGood<D, L>>,
+) -> RunError {
+    let (ov, i, j) = sys.max_overlap;
+    let what = if ov.is_nan() {
+        "non-finite positions or forces".to_string()
+    } else {
+        format!(
+            "overlap of {ov:.3} times the smaller radius between grains {i} and {j} (limit numerics.max_overlap = {})",
+            stage.max_overlap
+        )
+    };
+    unstable(plan, stage, sys, last_good, what)
+}
+
+/// A ParaView or trace frame at the first check of each new multiple of the dump interval.
+fn dump_frame<D: Dim, L: ContactLaw<D>>(
+    d: &mut DumpSpec,
+    sys: &System<D, L>,
+    plan: &Plan,
+    stage: &PlanStage,
+) {
+    let frame = (sys.time / d.every).floor() as u64;
+    if d.last != Some(frame) {
+        d.last = Some(frame);
+        (d.sink)(&snapshot_of(sys, plan, "running", stage.pressure));
+    }
+}
+
+/// At a check, the final phases of a stage: the relaxation watches the structure (GRC07
+/// damping, then FIRE where asked), the peak strain rate is kept, and AR07's quench removes
+/// the kinetic energy when it alone fails the criteria (not in stages that end otherwise than
+/// on the criteria: one cluster, full time).
+fn watch_phases<D: Dim, L: ContactLaw<D>>(
+    sys: &mut System<D, L>,
+    stage: &PlanStage,
+    watch: &mut StageWatch<D>,
+    inter: &[Link],
+    checks: &Checks,
+) {
+    let observed = watch.watching()
+        && watch.observe_structure(
+            sys.time,
+            settle_view(
+                sys,
+                stage,
+                inter,
+                checks,
+                watch.free_rollers(),
+                watch.settle_factor(),
+            ),
+            &mut pair_list(inter),
+            checks.packing_fraction,
+            &sys.s,
+        );
+    if observed {
+        watch.start_fire(sys.dt);
+        if let Some(z) = watch.tangential_zeta() {
+            sys.law = sys.law.with_tangential_damping(z);
+        }
+    }
+    watch.peak_strain_rate = watch.peak_strain_rate.max(checks.strain_rate);
+    if stage.quench && checks.only_kinetic_fails() {
+        let n = sys.len() as f64;
+        watch.quench.record(
+            sys.time,
+            sys.kinetic_energy() / n,
+            || pair_list(inter),
+            checks.packing_fraction,
+            &sys.s,
+        );
+        sys.quench();
+    }
+}
+
+/// How a stage ends at this check, if it does, in this order: an aggregation with one
+/// cluster; the criteria held (not for aggregation or full-time stages); the time limit; a
+/// stop request.
+fn ends_now(
+    kind: StageKind,
+    checks: &Checks,
+    held: bool,
+    out_of_time: bool,
+    stop: bool,
+) -> Option<StepEnd> {
+    let aggregate = kind == StageKind::Aggregate;
+    let full_time = kind == StageKind::FixedVolume { full_time: true };
+    if aggregate && checks.clusters == 1 {
+        Some(StepEnd::OneCluster)
+    } else if !aggregate && !full_time && held {
+        Some(StepEnd::Equilibrium)
+    } else if out_of_time {
+        Some(StepEnd::TimeLimit)
+    } else if stop {
+        Some(StepEnd::Interrupted)
+    } else {
+        None
+    }
 }
 
 /// Interacting pairs (i < j) of a list of interactions.

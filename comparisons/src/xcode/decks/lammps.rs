@@ -37,7 +37,7 @@
 //! `check_every` steps.
 
 use super::lammps_table::{pair_lines, tables, Classes, TABLE};
-use super::{header_lines, num, Code, Deck, StageKind, Start};
+use super::{header_lines, num, Code, Deck, PlanStage, StageKind, Start};
 use grainbench_engine::scene::{Law, Mu, Relax, RelaxMethod};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -279,13 +279,13 @@ fn rolling_sds(
 /// on the smoke packing: a step at the cap moved σ by 0.055 at κ = 1e4); g·B·dt/P > 2 makes
 /// the box flip between two sizes every step with σ ≈ P ± 0.028 (seen), so g ≤ P/(2 κ dt) (B
 /// taken as κ/4, 4× margin on the stability bound B·g·dt/P < 2).
-fn servo_gain(pressure: f64, st: &super::PlanStage) -> f64 {
+fn servo_gain(pressure: f64, st: &PlanStage) -> f64 {
     st.servo_gain
         .unwrap_or((2.0 * st.max_strain_rate).min(pressure / (2.0 * st.kappa * st.dt)))
 }
 
 /// How the deck's comment names g.
-fn servo_gain_source(st: &super::PlanStage) -> &'static str {
+fn servo_gain_source(st: &PlanStage) -> &'static str {
     if st.servo_gain.is_some() {
         "the scene's numerics.servo_gain"
     } else {
@@ -299,13 +299,7 @@ fn servo_gain_source(st: &super::PlanStage) -> &'static str {
 /// every step keeps it current; defined first, it runs first at the end of the step). fix
 /// deform measures its displacement from the box at each run's start: returns the lines that
 /// record that box, to give before every `run` of the stage.
-fn servo_2021(
-    s: &mut String,
-    start: &Start,
-    st: &super::PlanStage,
-    k: usize,
-    pressure: f64,
-) -> String {
+fn servo_2021(s: &mut String, start: &Start, st: &PlanStage, k: usize, pressure: f64) -> String {
     let axes = &["x", "y", "z"][..start.dimension];
     let cols: Vec<String> = (1..=start.dimension)
         .map(|a| format!("c_pvir[{a}]"))
@@ -546,119 +540,7 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
         );
     }
     for (k, st) in start.stages.iter().enumerate() {
-        let tol = st.tolerances;
-        let k1 = k + 1;
-        let _ = writeln!(s, "\n# Stage {k1}: {:?}", st.kind);
-        let _ = writeln!(s, "timestep {}", num(st.dt));
-        if k > 0 {
-            let _ = writeln!(s, "{}", pair_coeff(start, st.kappa, st.mu, code, 0.0));
-        }
-        // Every criterion but the kinetic one (the quench's test), then all of them.
-        let kinetic = format!("(v_kpg<{})", num(tol.kinetic_per_grain));
-        let mut crit = vec![format!("(c_fmax[1]<{})", num(tol.force))];
-        if friction && st.mu.value() > 0.0 {
-            crit.push(format!("(c_fmax[2]<{})", num(tol.moment)));
-        }
-        // Lines before each `run` of the stage (LAMMPS 2021 adhesive servo: the box at the run's start).
-        let mut rebase = String::new();
-        if let StageKind::Compress { pressure } = st.kind {
-            let servo = start.cohesive() || st.servo_gain.is_some();
-            if servo && code == Code::Lammps {
-                rebase = servo_2021(&mut s, start, st, k1, pressure);
-            } else if servo {
-                // An adhesive packing's virial swings to ±100 P while grains collide and
-                // stick: Berendsen's rate (P − σ)/(3Bτ) has no bound and collapses the cell.
-                // LAMMPS 2025's deform/pressure caps it: per axis, rate = g(σ_αα − P)/P at
-                // most the cap, g from [`servo_gain`].
-                let axes = ["x", "y", "z"][..start.dimension]
-                    .iter()
-                    .map(|a| {
-                        format!(
-                            "{a} pressure {} {}",
-                            num(pressure),
-                            num(servo_gain(pressure, st))
-                        )
-                    })
-                    .collect::<Vec<_>>()
-                    .join(" ");
-                let _ = writeln!(
-                    s,
-                    "# Stress control: fix deform/pressure, per-axis strain rate g·(σ_αα − P)/P, g = {}, at most the cap\n\
-                     fix baro all deform/pressure 1 {axes} max/rate {} normalize/pressure yes remap x\n\
-                     fix_modify baro press pvir",
-                    servo_gain_source(st),
-                    num(st.max_strain_rate)
-                );
-            } else {
-                let b = pressure / (3.0 * st.max_strain_rate);
-                let _ = writeln!(
-                    s,
-                    "# Berendsen: strain rate -(P_t - P)/(3 B tau); tau = 1, B = P_t/(3 rate cap) = {}",
-                    num(b)
-                );
-                let _ = writeln!(
-                    s,
-                    "fix baro all press/berendsen aniso {p} {p} 1 modulus {b} dilate all\n\
-                     fix_modify baro press pvir",
-                    p = num(pressure),
-                    b = num(b)
-                );
-            }
-            for a in 1..=start.dimension {
-                crit.push(format!(
-                    "(abs(c_pvir[{a}]-{})<{})",
-                    num(pressure),
-                    num(tol.stress)
-                ));
-            }
-        }
-        let (force, rest) = crit.split_first().expect("the force criterion");
-        let _ = writeln!(
-            s,
-            "variable ok{k1} equal {force}*{kinetic}{}",
-            rest.iter().map(|c| format!("*{c}")).collect::<String>()
-        );
-        if st.quench {
-            let _ = writeln!(s, "variable q{k1} equal {}", crit.join("*"));
-        }
-        let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
-        // FIRE (`relax.method = "fire"`) is not generated: the stage runs the law's dynamics
-        // to the criteria (capability `fire-relaxation`, approximate).
-        if let Some(relax) = st.relax.filter(|r| r.method == RelaxMethod::Damping) {
-            relaxed_stage(&mut s, start, st, k1, relax, code, &rebase);
-        } else if st.quench && !full_time {
-            quenched_stage(&mut s, st, k1, &rebase);
-        } else {
-            let _ = writeln!(
-                s,
-                "thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k1}\n\
-                 thermo_modify norm no flush yes\n\
-                 thermo {}",
-                st.check_every
-            );
-            if !full_time {
-                let _ = writeln!(
-                    s,
-                    "fix halt all halt {} v_ok{k1} > 0.5 error continue",
-                    st.check_every
-                );
-            }
-            let _ = writeln!(s, "{rebase}run {}", st.max_steps);
-            // The thermo line at the run's last step invokes the computes v_ok reads.
-            let _ = writeln!(
-                s,
-                "if \"${{ok{k1}}} > 0.5\" then \"variable status string equilibrium\" else \"variable status string time-limit\""
-            );
-            if !full_time {
-                s.push_str("unfix halt\n");
-            }
-        }
-        if matches!(st.kind, StageKind::Compress { .. }) {
-            s.push_str("unfix baro\n");
-            if !rebase.is_empty() {
-                let _ = writeln!(s, "unfix avp{k1}");
-            }
-        }
+        stage(&mut s, start, code, k, st, friction);
     }
     if start.trace_steps.is_some() {
         s.push_str("undump tr\nundump trc\n");
@@ -678,11 +560,131 @@ fn input(start: &Start, code: Code, deviations: &[String]) -> String {
     s
 }
 
+/// Stage `k` of the input: its time step and law (after the first), the stress control of a
+/// compression (Berendsen, deform/pressure or the 2021 adhesive servo), the equilibrium
+/// criteria as one variable, and the run: relaxed, quenched, or stopped by `fix halt` at
+/// equilibrium or at the stage's time limit.
+fn stage(s: &mut String, start: &Start, code: Code, k: usize, st: &PlanStage, friction: bool) {
+    let tol = st.tolerances;
+    let k1 = k + 1;
+    let _ = writeln!(s, "\n# Stage {k1}: {:?}", st.kind);
+    let _ = writeln!(s, "timestep {}", num(st.dt));
+    if k > 0 {
+        let _ = writeln!(s, "{}", pair_coeff(start, st.kappa, st.mu, code, 0.0));
+    }
+    // Every criterion but the kinetic one (the quench's test), then all of them.
+    let kinetic = format!("(v_kpg<{})", num(tol.kinetic_per_grain));
+    let mut crit = vec![format!("(c_fmax[1]<{})", num(tol.force))];
+    if friction && st.mu.value() > 0.0 {
+        crit.push(format!("(c_fmax[2]<{})", num(tol.moment)));
+    }
+    // Lines before each `run` of the stage (LAMMPS 2021 adhesive servo: the box at the run's start).
+    let mut rebase = String::new();
+    if let StageKind::Compress { pressure } = st.kind {
+        let servo = start.cohesive() || st.servo_gain.is_some();
+        if servo && code == Code::Lammps {
+            rebase = servo_2021(s, start, st, k1, pressure);
+        } else if servo {
+            // An adhesive packing's virial swings to ±100 P while grains collide and
+            // stick: Berendsen's rate (P − σ)/(3Bτ) has no bound and collapses the cell.
+            // LAMMPS 2025's deform/pressure caps it: per axis, rate = g(σ_αα − P)/P at
+            // most the cap, g from [`servo_gain`].
+            let axes = ["x", "y", "z"][..start.dimension]
+                .iter()
+                .map(|a| {
+                    format!(
+                        "{a} pressure {} {}",
+                        num(pressure),
+                        num(servo_gain(pressure, st))
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(" ");
+            let _ = writeln!(
+                s,
+                "# Stress control: fix deform/pressure, per-axis strain rate g·(σ_αα − P)/P, g = {}, at most the cap\n\
+                 fix baro all deform/pressure 1 {axes} max/rate {} normalize/pressure yes remap x\n\
+                 fix_modify baro press pvir",
+                servo_gain_source(st),
+                num(st.max_strain_rate)
+            );
+        } else {
+            let b = pressure / (3.0 * st.max_strain_rate);
+            let _ = writeln!(
+                s,
+                "# Berendsen: strain rate -(P_t - P)/(3 B tau); tau = 1, B = P_t/(3 rate cap) = {}",
+                num(b)
+            );
+            let _ = writeln!(
+                s,
+                "fix baro all press/berendsen aniso {p} {p} 1 modulus {b} dilate all\n\
+                 fix_modify baro press pvir",
+                p = num(pressure),
+                b = num(b)
+            );
+        }
+        for a in 1..=start.dimension {
+            crit.push(format!(
+                "(abs(c_pvir[{a}]-{})<{})",
+                num(pressure),
+                num(tol.stress)
+            ));
+        }
+    }
+    let (force, rest) = crit.split_first().expect("the force criterion");
+    let _ = writeln!(
+        s,
+        "variable ok{k1} equal {force}*{kinetic}{}",
+        rest.iter().map(|c| format!("*{c}")).collect::<String>()
+    );
+    if st.quench {
+        let _ = writeln!(s, "variable q{k1} equal {}", crit.join("*"));
+    }
+    let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
+    // FIRE (`relax.method = "fire"`) is not generated: the stage runs the law's dynamics
+    // to the criteria (capability `fire-relaxation`, approximate).
+    if let Some(relax) = st.relax.filter(|r| r.method == RelaxMethod::Damping) {
+        relaxed_stage(s, start, st, k1, relax, code, &rebase);
+    } else if st.quench && !full_time {
+        quenched_stage(s, st, k1, &rebase);
+    } else {
+        let _ = writeln!(
+            s,
+            "thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k1}\n\
+             thermo_modify norm no flush yes\n\
+             thermo {}",
+            st.check_every
+        );
+        if !full_time {
+            let _ = writeln!(
+                s,
+                "fix halt all halt {} v_ok{k1} > 0.5 error continue",
+                st.check_every
+            );
+        }
+        let _ = writeln!(s, "{rebase}run {}", st.max_steps);
+        // The thermo line at the run's last step invokes the computes v_ok reads.
+        let _ = writeln!(
+            s,
+            "if \"${{ok{k1}}} > 0.5\" then \"variable status string equilibrium\" else \"variable status string time-limit\""
+        );
+        if !full_time {
+            s.push_str("unfix halt\n");
+        }
+    }
+    if matches!(st.kind, StageKind::Compress { .. }) {
+        s.push_str("unfix baro\n");
+        if !rebase.is_empty() {
+            let _ = writeln!(s, "unfix avp{k1}");
+        }
+    }
+}
+
 /// A stage with `criteria.quench` (engine/src/run/quench.rs): runs stopped by `fix halt` when
 /// every criterion but the kinetic one holds; then the stage ends if the kinetic one holds too,
 /// or every velocity and spin is set to zero and the stage goes on for one check interval,
 /// judged again at its end as our engine judges its next check.
-fn quenched_stage(s: &mut String, st: &super::PlanStage, k: usize, rebase: &str) {
+fn quenched_stage(s: &mut String, st: &PlanStage, k: usize, rebase: &str) {
     let _ = write!(
         s,
         "thermo_style custom step time v_phi c_pvir[1] c_pvir[2] c_pvir[3] c_fmax[1] c_fmax[2] v_kpg v_ok{k} v_q{k}\n\
@@ -724,7 +726,7 @@ fn quenched_stage(s: &mut String, st: &super::PlanStage, k: usize, rebase: &str)
 fn relaxed_stage(
     s: &mut String,
     start: &Start,
-    st: &super::PlanStage,
+    st: &PlanStage,
     k: usize,
     relax: Relax,
     code: Code,

@@ -28,7 +28,7 @@
 //!   id1 id2 periodic-flag fx fy fz delta, force on the first grain), `final.status`
 //!   (`equilibrium` or `time-limit`), `final.time` (elapsed time and step).
 
-use super::{header_lines, num, Code, Deck, StageKind, Start};
+use super::{header_lines, num, Code, Deck, PlanStage, StageKind, Start};
 use grainbench_engine::scene::Law;
 use std::fmt::Write as _;
 
@@ -181,116 +181,10 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
             ["%.17g"; 7].join(" ")
         );
     }
-    let mut prev_mu = first.mu;
-    let mut prev_kappa = first.kappa;
+    let mut prev = first;
     for (k, st) in start.stages.iter().enumerate() {
-        let k1 = k + 1;
-        let _ = writeln!(s, "# ---- stage {k1}: {:?}", st.kind);
-        if st.mu != prev_mu {
-            let _ = writeln!(
-                s,
-                "fix m4 all property/global coefficientFriction peratomtypepair 1 {}",
-                super::mu_text(st.mu)
-            );
-            prev_mu = st.mu;
-        }
-        if st.kappa != prev_kappa {
-            let _ = writeln!(
-                s,
-                "fix m1 all property/global youngsModulus peratomtype {}",
-                num(young(st.kappa, poisson))
-            );
-            prev_kappa = st.kappa;
-        }
-        let _ = writeln!(s, "timestep {}", num(st.dt));
-        let tol = &st.tolerances;
-        let mut ok = format!(
-            "(c_fmax<={})*(c_tmax<={})*(v_kpg<={})",
-            num(tol.force),
-            num(tol.moment),
-            num(tol.kinetic_per_grain)
-        );
-        let mut thermo =
-            "step atoms v_P f_pav[1] f_pav[2] f_pav[3] c_fmax c_tmax v_kpg lx".to_string();
-        match st.kind {
-            StageKind::Compress { pressure } => {
-                for a in 1..=3 {
-                    let _ = write!(
-                        ok,
-                        "*(abs(f_pav[{a}]-{})<={})",
-                        num(pressure),
-                        num(tol.stress)
-                    );
-                }
-                // Per axis: ε̇_α = cap·clamp((σ_αα − P)/(w P), −1, 1), clamp written with abs
-                // (no min/max in equal-style variables of this version).
-                let dt = num(st.dt);
-                for (a, ax) in ["x", "y", "z"].iter().enumerate() {
-                    let a1 = a + 1;
-                    let _ = writeln!(
-                        s,
-                        "variable e{ax}{k1} equal (f_pav[{a1}]-{p})/{w}\n\
-                         variable r{ax}{k1} equal {c}*0.5*(abs(v_e{ax}{k1}+1)-abs(v_e{ax}{k1}-1))\n\
-                         variable L0{ax}{k1} equal 0\n\
-                         variable dL{ax}{k1} equal l{ax}*(1+v_r{ax}{k1}*{dt})-v_L0{ax}{k1}\n\
-                         variable vL{ax}{k1} equal l{ax}*v_r{ax}{k1}",
-                        p = num(pressure),
-                        // Band w·P_target (w in absolute units for a zero target).
-                        w = num(SERVO_BAND * if pressure > 0.0 { pressure } else { 1.0 }),
-                        c = num(st.max_strain_rate),
-                    );
-                }
-                let _ = writeln!(
-                    s,
-                    "fix servo all deform 1 x variable v_dLx{k1} v_vLx{k1} y variable v_dLy{k1} v_vLy{k1} z variable v_dLz{k1} v_vLz{k1} remap x"
-                );
-                thermo.push_str(&format!(" v_rx{k1} v_ry{k1} v_rz{k1}"));
-            }
-            StageKind::FixedVolume { .. } | StageKind::Aggregate => {}
-        }
-        let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
-        let chunks = st.max_steps.div_ceil(st.check_every).max(1);
-        let _ = writeln!(
-            s,
-            "variable ok{k1} equal {ok}\n\
-             thermo_style custom {thermo} v_ok{k1}\n\
-             thermo_modify norm no lost ignore\n\
-             thermo {ce}\n\
-             variable st string time-limit\n\
-             variable s0_{k1} equal ${{stepnow}}\n\
-             variable n{k1} loop {chunks}\n\
-             label loop{k1}",
-            ce = st.check_every,
-        );
-        if matches!(st.kind, StageKind::Compress { .. }) {
-            // fix deform sets L = L(run start) + dL: the start lengths of this chunk.
-            let _ = writeln!(
-                s,
-                "variable L0x{k1} equal ${{Lxnow}}\nvariable L0y{k1} equal ${{Lynow}}\nvariable L0z{k1} equal ${{Lznow}}"
-            );
-        }
-        let _ = writeln!(s, "run {}", st.check_every);
-        if full_time {
-            let _ = writeln!(
-                s,
-                "if \"${{ok{k1}}} > 0.5\" then \"variable st string equilibrium\" else \"variable st string time-limit\""
-            );
-        } else {
-            let _ = writeln!(
-                s,
-                "if \"${{ok{k1}}} > 0.5\" then \"variable st string equilibrium\" \"jump SELF done{k1}\""
-            );
-        }
-        let _ = writeln!(
-            s,
-            "next n{k1}\njump SELF loop{k1}\nlabel done{k1}\n\
-             variable tsum equal ${{tsum}}+(${{stepnow}}-${{s0_{k1}}})*{dt}",
-            dt = num(st.dt)
-        );
-        if matches!(st.kind, StageKind::Compress { .. }) {
-            let _ = writeln!(s, "unfix servo");
-        }
-        let _ = writeln!(s, "print \"stage {k1} end: ${{st}}\"\n");
+        stage(&mut s, k, st, prev, poisson);
+        prev = st;
     }
     let cols = CONTACT_COLUMNS;
     let g17 = |n: usize| vec!["%.17g"; n].join(" ");
@@ -326,6 +220,116 @@ pub fn deck(start: &Start, deviations: &[String]) -> Deck {
             "log.liggghts".into(),
         ],
     }
+}
+
+/// Stage `k` of the deck: μ and κ where they change from the stage before (`prev`), the time
+/// step, the servo of a compression (per axis, fix deform) and the check loop that ends the
+/// stage at equilibrium or at its time limit.
+fn stage(s: &mut String, k: usize, st: &PlanStage, prev: &PlanStage, poisson: f64) {
+    let k1 = k + 1;
+    let _ = writeln!(s, "# ---- stage {k1}: {:?}", st.kind);
+    if st.mu != prev.mu {
+        let _ = writeln!(
+            s,
+            "fix m4 all property/global coefficientFriction peratomtypepair 1 {}",
+            super::mu_text(st.mu)
+        );
+    }
+    if st.kappa != prev.kappa {
+        let _ = writeln!(
+            s,
+            "fix m1 all property/global youngsModulus peratomtype {}",
+            num(young(st.kappa, poisson))
+        );
+    }
+    let _ = writeln!(s, "timestep {}", num(st.dt));
+    let tol = &st.tolerances;
+    let mut ok = format!(
+        "(c_fmax<={})*(c_tmax<={})*(v_kpg<={})",
+        num(tol.force),
+        num(tol.moment),
+        num(tol.kinetic_per_grain)
+    );
+    let mut thermo = "step atoms v_P f_pav[1] f_pav[2] f_pav[3] c_fmax c_tmax v_kpg lx".to_string();
+    match st.kind {
+        StageKind::Compress { pressure } => {
+            for a in 1..=3 {
+                let _ = write!(
+                    ok,
+                    "*(abs(f_pav[{a}]-{})<={})",
+                    num(pressure),
+                    num(tol.stress)
+                );
+            }
+            // Per axis: ε̇_α = cap·clamp((σ_αα − P)/(w P), −1, 1), clamp written with abs
+            // (no min/max in equal-style variables of this version).
+            let dt = num(st.dt);
+            for (a, ax) in ["x", "y", "z"].iter().enumerate() {
+                let a1 = a + 1;
+                let _ = writeln!(
+                    s,
+                    "variable e{ax}{k1} equal (f_pav[{a1}]-{p})/{w}\n\
+                     variable r{ax}{k1} equal {c}*0.5*(abs(v_e{ax}{k1}+1)-abs(v_e{ax}{k1}-1))\n\
+                     variable L0{ax}{k1} equal 0\n\
+                     variable dL{ax}{k1} equal l{ax}*(1+v_r{ax}{k1}*{dt})-v_L0{ax}{k1}\n\
+                     variable vL{ax}{k1} equal l{ax}*v_r{ax}{k1}",
+                    p = num(pressure),
+                    // Band w·P_target (w in absolute units for a zero target).
+                    w = num(SERVO_BAND * if pressure > 0.0 { pressure } else { 1.0 }),
+                    c = num(st.max_strain_rate),
+                );
+            }
+            let _ = writeln!(
+                s,
+                "fix servo all deform 1 x variable v_dLx{k1} v_vLx{k1} y variable v_dLy{k1} v_vLy{k1} z variable v_dLz{k1} v_vLz{k1} remap x"
+            );
+            thermo.push_str(&format!(" v_rx{k1} v_ry{k1} v_rz{k1}"));
+        }
+        StageKind::FixedVolume { .. } | StageKind::Aggregate => {}
+    }
+    let full_time = matches!(st.kind, StageKind::FixedVolume { full_time: true });
+    let chunks = st.max_steps.div_ceil(st.check_every).max(1);
+    let _ = writeln!(
+        s,
+        "variable ok{k1} equal {ok}\n\
+         thermo_style custom {thermo} v_ok{k1}\n\
+         thermo_modify norm no lost ignore\n\
+         thermo {ce}\n\
+         variable st string time-limit\n\
+         variable s0_{k1} equal ${{stepnow}}\n\
+         variable n{k1} loop {chunks}\n\
+         label loop{k1}",
+        ce = st.check_every,
+    );
+    if matches!(st.kind, StageKind::Compress { .. }) {
+        // fix deform sets L = L(run start) + dL: the start lengths of this chunk.
+        let _ = writeln!(
+            s,
+            "variable L0x{k1} equal ${{Lxnow}}\nvariable L0y{k1} equal ${{Lynow}}\nvariable L0z{k1} equal ${{Lznow}}"
+        );
+    }
+    let _ = writeln!(s, "run {}", st.check_every);
+    if full_time {
+        let _ = writeln!(
+            s,
+            "if \"${{ok{k1}}} > 0.5\" then \"variable st string equilibrium\" else \"variable st string time-limit\""
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "if \"${{ok{k1}}} > 0.5\" then \"variable st string equilibrium\" \"jump SELF done{k1}\""
+        );
+    }
+    let _ = writeln!(
+        s,
+        "next n{k1}\njump SELF loop{k1}\nlabel done{k1}\n\
+         variable tsum equal ${{tsum}}+(${{stepnow}}-${{s0_{k1}}})*{dt}",
+        dt = num(st.dt)
+    );
+    if matches!(st.kind, StageKind::Compress { .. }) {
+        let _ = writeln!(s, "unfix servo");
+    }
+    let _ = writeln!(s, "print \"stage {k1} end: ${{st}}\"\n");
 }
 
 /// `read_data` file for `atom_style granular`: id type diameter density x y z, then the
