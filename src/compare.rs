@@ -205,7 +205,7 @@ fn compare_one(
         }
         let dir = out.join(code.name());
         let mut r = CodeResult {
-            golden: crosscode::golden_metrics(Path::new("."), &scene.name, code.name()),
+            golden: crosscode::golden_metrics(Path::new("."), &scene.name, code),
             pressure_target: p_target,
             pressure_tolerance: p_tol,
             ..CodeResult::new(code, Outcome::Ran)
@@ -216,10 +216,7 @@ fn compare_one(
         };
         if let (Some(snap), true) = (&snap, traced) {
             if let (Some(report), Some(list)) = (trace_of(code, &dir, scene, snap)?, &mut impacts) {
-                list.push(CodeImpact {
-                    code: code.name().into(),
-                    report,
-                });
+                list.push(CodeImpact { code, report });
             }
         }
         if let Some(snap) = snap {
@@ -263,7 +260,7 @@ fn compare_one(
             let text = std::fs::read_to_string(&path)
                 .with_context(|| format!("reading {}", path.display()))?;
             pairs.push(CodePairs {
-                code: c.code.name().into(),
+                code: c.code,
                 pairs: pair_history::from_csv(&text)
                     .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?,
             });

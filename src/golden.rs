@@ -127,9 +127,7 @@ fn update(scene: &str, codes: &[String], from: Option<PathBuf>) -> Result<i32> {
             eprintln!("{}: not recorded ({})", c.code, c.outcome);
             continue;
         }
-        let out = Path::new("golden")
-            .join(&scene.name)
-            .join(format!("{}.json", c.code));
+        let out = crosscode::golden_file(&scene.name, c.code);
         if recorded_by_reproduce(&out) {
             eprintln!(
                 "{}: not recorded: {} holds a `grainbench reproduce --record` result over seeds; rerun that command to change it",
@@ -187,7 +185,7 @@ fn update(scene: &str, codes: &[String], from: Option<PathBuf>) -> Result<i32> {
         // The overlaid plots of a run that recorded several codes at once.
         for plot in ["pf.svg", "gr.svg"] {
             if let Ok(bytes) = std::fs::read(dir.join(plot)) {
-                let to = Path::new("golden").join(&scene.name).join(plot);
+                let to = crosscode::golden_file(&scene.name, Code::Rust).with_file_name(plot);
                 write_atomic(&to, &bytes)?;
                 println!("wrote {}", to.display());
             }

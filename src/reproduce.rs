@@ -8,6 +8,8 @@ use anyhow::{bail, Context, Result};
 use grainbench_comparisons::metrics::{analyze, density, Analysis, MODULI_METRICS};
 use grainbench_comparisons::report::reproduction::{self, SeedStats};
 use grainbench_comparisons::report::{consolidation, figures, paper};
+use grainbench_comparisons::xcode::crosscode;
+use grainbench_comparisons::xcode::Code;
 use grainbench_engine::run::layout::{stage_file, CHECKPOINT, STAGES, SUMMARY};
 use grainbench_engine::run::StepEnd;
 use grainbench_engine::{library, snapshot, Snapshot};
@@ -488,7 +490,7 @@ fn record(
     values: &[Vec<(String, f64)>],
     tables: Tables,
 ) -> Result<PathBuf> {
-    let path = Path::new("golden").join(scene_name).join("rust.json");
+    let path = crosscode::golden_file(scene_name, Code::Rust);
     let mut doc = serde_json::json!({
         "code": format!("grainbench {}", env!("CARGO_PKG_VERSION")),
         "scene": scene_name,

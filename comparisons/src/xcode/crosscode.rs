@@ -10,7 +10,7 @@ use crate::report::format::dec4;
 use crate::report::paper;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Metrics shown in the terminal table (the files carry all of them).
 pub const TABLE_METRICS: &[&str] = &[
@@ -137,38 +137,48 @@ pub struct Comparison {
 /// One code's contacts over a few-body trace.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct CodePairs {
-    pub code: String,
+    pub code: Code,
     pub pairs: Vec<PairHistory>,
 }
 
 /// One code's two-body impact against the analytic values.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct CodeImpact {
-    pub code: String,
+    pub code: Code,
     pub report: ImpactReport,
 }
 
 /// The golden files of the default comparison scene, embedded so that a bare `grainbench` run
 /// outside the repository still shows them for the codes that are not installed.
-fn embedded_golden(scene: &str, code: &str) -> Option<&'static str> {
+fn embedded_golden(scene: &str, code: Code) -> Option<&'static str> {
     match (scene, code) {
-        ("xcode-smoke", "rust") => Some(include_str!("../../../golden/xcode-smoke/rust.json")),
-        ("xcode-smoke", "lammps") => Some(include_str!("../../../golden/xcode-smoke/lammps.json")),
-        ("xcode-smoke", "lammps-2025") => {
+        ("xcode-smoke", Code::Rust) => Some(include_str!("../../../golden/xcode-smoke/rust.json")),
+        ("xcode-smoke", Code::Lammps) => {
+            Some(include_str!("../../../golden/xcode-smoke/lammps.json"))
+        }
+        ("xcode-smoke", Code::Lammps2025) => {
             Some(include_str!("../../../golden/xcode-smoke/lammps-2025.json"))
         }
-        ("xcode-smoke", "liggghts") => {
+        ("xcode-smoke", Code::Liggghts) => {
             Some(include_str!("../../../golden/xcode-smoke/liggghts.json"))
         }
-        ("xcode-smoke", "yade") => Some(include_str!("../../../golden/xcode-smoke/yade.json")),
+        ("xcode-smoke", Code::Yade) => Some(include_str!("../../../golden/xcode-smoke/yade.json")),
         _ => None,
     }
 }
 
-/// The recorded document `golden/<scene>/<code>.json` (the embedded copy for the default
+/// Where the golden record of `code` on scene `scene` is, relative to the repository root:
+/// `golden/<scene>/<code>.json`. Every reader and writer of golden records finds it here.
+pub fn golden_file(scene: &str, code: Code) -> PathBuf {
+    Path::new("golden")
+        .join(scene)
+        .join(format!("{}.json", code.name()))
+}
+
+/// The recorded document [`golden_file`] under `root` (the embedded copy for the default
 /// scene when the file is not there).
-fn golden_doc(root: &Path, scene: &str, code: &str) -> Option<serde_json::Value> {
-    let path = root.join("golden").join(scene).join(format!("{code}.json"));
+fn golden_doc(root: &Path, scene: &str, code: Code) -> Option<serde_json::Value> {
+    let path = root.join(golden_file(scene, code));
     let text = std::fs::read_to_string(&path)
         .ok()
         .or_else(|| embedded_golden(scene, code).map(String::from))?;
@@ -195,7 +205,7 @@ fn mean_metrics(doc: &serde_json::Value) -> BTreeMap<String, f64> {
 }
 
 /// The mean metrics of `golden/<scene>/<code>.json` (any number of seeds); empty if none.
-pub fn golden_metrics(root: &Path, scene: &str, code: &str) -> BTreeMap<String, f64> {
+pub fn golden_metrics(root: &Path, scene: &str, code: Code) -> BTreeMap<String, f64> {
     golden_doc(root, scene, code)
         .map(|d| mean_metrics(&d))
         .unwrap_or_default()
@@ -204,7 +214,7 @@ pub fn golden_metrics(root: &Path, scene: &str, code: &str) -> BTreeMap<String, 
 /// The recorded result of `code` (`golden/<scene>/<code>.json`) as a table column: mean metrics
 /// over its seeds, status and wall time of its first seed, the code's version.
 pub fn recorded(root: &Path, scene: &str, code: Code) -> Option<CodeResult> {
-    let doc = golden_doc(root, scene, code.name())?;
+    let doc = golden_doc(root, scene, code)?;
     let first = &doc["seeds"][0];
     Some(CodeResult {
         status: first["status"].as_str().map(String::from),
@@ -315,7 +325,7 @@ pub fn build_with(
     for c in &codes {
         match c.outcome {
             Outcome::Ran | Outcome::Recorded if impacts.is_some() => {
-                let found = impacts.iter().flatten().find(|i| i.code == c.code.name());
+                let found = impacts.iter().flatten().find(|i| i.code == c.code);
                 match found {
                     None => failures.push(format!(
                         "{}: no impact measured in its trace (no contact, or still in contact at the end)",
@@ -496,8 +506,8 @@ impl Comparison {
     /// Adds each code's contacts of a few-body trace and checks them against ours: every pair
     /// we trace is traced, with its peak normal force within [`PEAK_TOLERANCE`].
     pub fn add_pairs(&mut self, pairs: Vec<CodePairs>) {
-        if let Some(ours) = pairs.iter().find(|c| c.code == Code::Rust.name()) {
-            for c in pairs.iter().filter(|c| c.code != Code::Rust.name()) {
+        if let Some(ours) = pairs.iter().find(|c| c.code == Code::Rust) {
+            for c in pairs.iter().filter(|c| c.code != Code::Rust) {
                 for p in &ours.pairs {
                     match c.pairs.iter().find(|q| (q.i, q.j) == (p.i, p.j)) {
                         None => self.failures.push(format!(
@@ -541,7 +551,7 @@ impl Comparison {
             .collect();
         keys.sort_unstable();
         keys.dedup();
-        let ours = self.pairs.iter().find(|c| c.code == Code::Rust.name());
+        let ours = self.pairs.iter().find(|c| c.code == Code::Rust);
         let find =
             |c: &CodePairs, k: (usize, usize)| c.pairs.iter().find(|p| (p.i, p.j) == k).cloned();
         for k in keys {
@@ -591,10 +601,7 @@ impl Comparison {
         s.push_str(&" --- |".repeat(self.impacts.len()));
         s.push('\n');
         let checks: Vec<Vec<Check>> = self.impacts.iter().map(|i| i.report.checks()).collect();
-        let rust = self
-            .impacts
-            .iter()
-            .position(|i| i.code == Code::Rust.name());
+        let rust = self.impacts.iter().position(|i| i.code == Code::Rust);
         for (q, check) in checks[0].iter().enumerate() {
             s.push_str(&format!(
                 "| {} | {:.6e} | ± {:.2} % |",
