@@ -17,9 +17,14 @@ pub struct Written {
 
 impl Written {
     fn add(&mut self, what: &str, r: Result<plots::PlotFiles, plots::PlotError>) {
+        self.record(&format!("{what} plot"), r.map(|f| vec![f.svg, f.png]));
+    }
+
+    /// The files of a plot, or a warning that `what` could not be drawn.
+    pub fn record(&mut self, what: &str, r: Result<Vec<PathBuf>, plots::PlotError>) {
         match r {
-            Ok(f) => self.files.extend([f.svg, f.png]),
-            Err(e) => self.warnings.push(format!("no {what} plot: {e}")),
+            Ok(files) => self.files.extend(files),
+            Err(e) => self.warnings.push(format!("no {what}: {e}")),
         }
     }
 

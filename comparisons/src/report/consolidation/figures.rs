@@ -30,10 +30,7 @@ pub fn all(
         ),
         ("blob-size plot", plot_blob_size(out, seeds)),
     ] {
-        match r {
-            Ok(files) => written.files.extend(files),
-            Err(e) => written.warnings.push(format!("no {what}: {e}")),
-        }
+        written.record(what, r);
     }
     written
 }
